@@ -1,0 +1,14 @@
+"""Exceptions that the command line turns into one clear message and a non-zero exit code."""
+
+
+class SceneError(ValueError):
+    """An invalid scene value: names the key and what is allowed."""
+
+    def __init__(self, key: str, message: str):
+        super().__init__(f"{key}: {message}")
+        self.key = key
+        self.message = message
+
+
+class NotConvergedError(RuntimeError):
+    """The nonlinear iteration stopped before reaching its tolerance."""

@@ -1,0 +1,147 @@
+"""The penalty variational problem (3.5)-(3.12) for one scene: spaces, boundary conditions and forms.
+
+b(w; u, v) = int 2/3 G(w) e'(u):e'(v) dx + int (1/d) div u div v dx + int_G3 (1/d_N) u_N^+ v_N ds,
+plus the regularised friction <j'_dT(w, u), v> on Gamma3 when mu > 0 and f(v) = int_G5 F_N v_N
+when the scene has Gamma5. Only the terms the scene needs are built.
+"""
+from __future__ import annotations
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+from . import contact, friction
+from .compat import function_space, petsc_vec
+from .geometry import ROLES, FormingMesh
+from .kinematics import deviatoric_product, equivalent_strain_rate, strain_rate
+from .projection import LumpedProjector
+from .scene import Scene
+
+
+def quadrature_degree(element_degree: int, reduced: bool) -> int:
+    """Gauss degree of complete ((k+1)^2 points) or reduced (k^2 points) integration for Q_k."""
+    points = element_degree if reduced else element_degree + 1
+    return 2 * points - 1
+
+
+class FlowProblem:
+    """Velocity space, secant state and compiled forms of the penalty problem for one scene.
+
+    The state functions hold the iterate the coefficients are taken from: ``u_state`` (u_n) for the
+    secant coefficient G, the contact active set and the friction regularisation, and
+    ``u_friction`` (u_{0,m} in (3.33), u_n in (3.13)) for the friction bound tau_f.
+    """
+
+    def __init__(self, scene: Scene, forming_mesh: FormingMesh):
+        self.scene = scene
+        self.mesh = mesh = forming_mesh.mesh
+        self.roles = forming_mesh.roles
+        self.facet_tags = forming_mesh.facet_tags
+        self.comm = mesh.comm
+        k = scene.discretisation.degree
+        self.V = function_space(mesh, "P", k, (2,))
+        self.u = dolfinx.fem.Function(self.V, name="velocity")
+        self.u_state = dolfinx.fem.Function(self.V)
+        self.u_friction = dolfinx.fem.Function(self.V)
+
+        self.full_degree = quadrature_degree(k, reduced=False)
+        reduced = scene.discretisation.volumetric_integration == "reduced"
+        self.volumetric_degree = quadrature_degree(k, reduced)
+        self.dx = ufl.dx(domain=mesh, metadata={"quadrature_degree": self.full_degree})
+        self.dx_vol = ufl.dx(domain=mesh, metadata={"quadrature_degree": self.volumetric_degree})
+        self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=forming_mesh.facet_tags,
+                              metadata={"quadrature_degree": self.full_degree})
+        self.n = ufl.FacetNormal(mesh)
+
+        # Vertex nodes with bilinear interpolation keep G > 0 everywhere; Q2 nodal values would not.
+        averaging_space = (function_space(mesh, "DP", 0) if scene.discretisation.averaging == "centres"
+                           else function_space(mesh, "P", 1))
+        self.strain_rate = dolfinx.fem.Function(averaging_space, name="equivalent_strain_rate")
+        self.secant = dolfinx.fem.Function(averaging_space, name="secant_viscosity")
+        self._rate_projector = LumpedProjector(equivalent_strain_rate(self.u_state), self.strain_rate,
+                                               self.full_degree)
+
+        self.has_contact = "gamma3_contact" in self.roles
+        self.has_friction = self.has_contact and scene.friction.mu > 0
+        self.has_force = "gamma5_force" in self.roles and scene.process.applied_force is not None
+        self.bcs = self._boundary_conditions()
+
+        du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        self.a_ufl = self._bilinear(du, v)
+        self.a = dolfinx.fem.form(self.a_ufl)
+        self.L = dolfinx.fem.form(self._load(v)) if self.has_force else None
+        residual = ufl.action(self.a_ufl, self.u)
+        if self.has_force:
+            residual = residual - self._load(v)
+        self.residual = dolfinx.fem.form(residual)
+
+    # -- terms of b(w; u, v) and f(v) ---------------------------------------------------------
+    def viscous_form(self, u, v):
+        """a(w; u, v) of (3.2) with the secant coefficient G(w) = sigma_p/rate held in ``secant``."""
+        return 2.0 / 3.0 * self.secant * deviatoric_product(strain_rate(u), strain_rate(v)) * self.dx
+
+    def volumetric_form(self, u, v):
+        """Penalty incompressibility (1/d) int div u div v of (3.5), complete or reduced Gauss."""
+        return 1.0 / self.scene.penalty.d * ufl.div(u) * ufl.div(v) * self.dx_vol
+
+    @property
+    def ds_contact(self):
+        return self.ds(ROLES["gamma3_contact"])
+
+    def friction_coefficient(self):
+        """Slip coefficient tau_f(u_friction)/sqrt(|u_state,T|^2 + d_T^2); tau_f from the local (3.4) stress."""
+        pressure = contact.contact_pressure(self.u_friction, self.n, self.scene.penalty.d_N)
+        tau_f = friction.friction_bound(self.scene.friction.mu, pressure)
+        return friction.slip_coefficient(tau_f, self.u_state, self.n, self.scene.friction.d_T)
+
+    def _bilinear(self, u, v):
+        form = self.viscous_form(u, v) + self.volumetric_form(u, v)
+        if self.has_contact:
+            form += contact.contact_form(u, v, self.u_state, self.n, self.scene.penalty.d_N, self.ds_contact)
+        if self.has_friction:
+            form += friction.friction_form(u, v, self.friction_coefficient(), self.n, self.ds_contact)
+        return form
+
+    def _load(self, v):
+        """f(v) = int_G5 F_N v_N of (3.2)."""
+        F_N = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(self.scene.process.applied_force))
+        return F_N * ufl.dot(v, self.n) * self.ds(ROLES["gamma5_force"])
+
+    # -- boundary conditions ------------------------------------------------------------------
+    def boundary_dofs(self, role: str, component: int) -> np.ndarray:
+        """Local dof indices (blocked space, unrolled) of one velocity component on a boundary role."""
+        facets = self.role_facets(role)
+        return dolfinx.fem.locate_dofs_topological(self.V.sub(component), self.mesh.topology.dim - 1, facets)
+
+    def role_facets(self, role: str) -> np.ndarray:
+        """Local facets of a boundary role."""
+        return self.facet_tags.indices[self.facet_tags.values == ROLES[role]]
+
+    def _boundary_conditions(self) -> list:
+        """u_N = u_N^0 on Gamma1 (2.5) as u_x = velocity, u_N = 0 on Gamma6 (2.8) as u_y = 0."""
+        velocity = PETSc.ScalarType(self.scene.process.velocity)
+        return [dolfinx.fem.dirichletbc(velocity, self.boundary_dofs("gamma1_velocity", 0), self.V.sub(0)),
+                dolfinx.fem.dirichletbc(PETSc.ScalarType(0.0), self.boundary_dofs("gamma6_symmetry", 1),
+                                        self.V.sub(1))]
+
+    # -- secant state ---------------------------------------------------------------------------
+    def set_uniform_secant(self, rate: float) -> None:
+        """A uniform modulus G(rate), the start of both secant methods (u_0 carries no strain rate)."""
+        self.secant.x.array[:] = self.scene.material.secant(np.array([rate]))[0]
+
+    def update_state(self, u: dolfinx.fem.Function, friction_too: bool) -> None:
+        """Take G, the contact set and the slip regularisation from u (and tau_f too if asked)."""
+        u.x.scatter_forward()
+        petsc_vec(u).copy(petsc_vec(self.u_state))
+        self.u_state.x.scatter_forward()
+        self._rate_projector.project()
+        self.secant.x.array[:] = self.scene.material.secant(self.strain_rate.x.array)
+        if friction_too:
+            self.freeze_friction(u)
+
+    def freeze_friction(self, u: dolfinx.fem.Function) -> None:
+        """tau_f from u: u_{0,m} of the modified method (3.33)."""
+        petsc_vec(u).copy(petsc_vec(self.u_friction))
+        self.u_friction.x.scatter_forward()

@@ -1,0 +1,83 @@
+"""Rigid-plastic, strain-rate dependent flow-stress laws and their secant coefficient.
+
+Each law gives the uniaxial yield limit sigma_p(rate) and the secant coefficient
+G(rate) = sigma_p(rate)/rate used by a(w; u, v) of (3.2). Both laws satisfy (2.10)
+(eta_1 <= sigma_p' <= sigma_p/rate <= eta_2) on the parameters their ``check`` accepts.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SceneError
+
+
+@dataclass(frozen=True)
+class PiecewisePowerLaw:
+    """The paper's law (4.5): linear below rate1, A*rate**alpha on [rate1, rate2], linear above rate2."""
+
+    A: float = math.sqrt(3.0)
+    alpha: float = 1e-3
+    rate1: float = 1e-3
+    rate2: float = 1e3
+    law: str = "piecewise_power"
+
+    def check(self, section: str = "material") -> None:
+        """Reject parameters that break (2.10)."""
+        if not self.A > 0:
+            raise SceneError(f"{section}.A", f"must be > 0 (a positive flow stress scale); got {self.A}")
+        if not 0 < self.alpha <= 1:
+            raise SceneError(f"{section}.alpha",
+                             f"must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); got {self.alpha}")
+        if not self.rate1 > 0:
+            raise SceneError(f"{section}.rate1", f"must be > 0 for (2.10) (bounded secant); got {self.rate1}")
+        if not self.rate2 > self.rate1:
+            raise SceneError(f"{section}.rate2",
+                             f"must be > material.rate1 ({self.rate1}); got {self.rate2}")
+
+    def flow_stress(self, rate: np.ndarray) -> np.ndarray:
+        """sigma_p(rate) of (4.5)."""
+        return self.secant(rate) * np.asarray(rate, dtype=float)
+
+    def secant(self, rate: np.ndarray) -> np.ndarray:
+        """G(rate) = sigma_p(rate)/rate of (4.5); bounded by eta_2 = A*rate1**(alpha-1)."""
+        clipped = np.clip(np.asarray(rate, dtype=float), self.rate1, self.rate2)
+        return self.A * clipped ** (self.alpha - 1.0)
+
+
+@dataclass(frozen=True)
+class PowerLaw:
+    """Pure power law sigma_p = A*rate**n with a floor rate_floor below which the secant is constant.
+
+    Without the floor the secant A*rate**(n-1) is unbounded at rate -> 0 and (2.10) fails; with it,
+    (2.10) holds on every bounded range of rates.
+    """
+
+    A: float = math.sqrt(3.0)
+    n: float = 0.5
+    rate_floor: float = 1e-6
+    law: str = "power"
+
+    def check(self, section: str = "material") -> None:
+        """Reject parameters that break (2.10)."""
+        if not self.A > 0:
+            raise SceneError(f"{section}.A", f"must be > 0 (a positive flow stress scale); got {self.A}")
+        if not 0 < self.n <= 1:
+            raise SceneError(f"{section}.n", f"must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); got {self.n}")
+        if not self.rate_floor > 0:
+            raise SceneError(f"{section}.rate_floor",
+                             f"must be > 0: it bounds the secant at zero rate (2.10); got {self.rate_floor}")
+
+    def flow_stress(self, rate: np.ndarray) -> np.ndarray:
+        """sigma_p(rate), linear below rate_floor."""
+        return self.secant(rate) * np.asarray(rate, dtype=float)
+
+    def secant(self, rate: np.ndarray) -> np.ndarray:
+        """G(rate) = sigma_p/rate = A*max(rate, rate_floor)**(n-1)."""
+        return self.A * np.maximum(np.asarray(rate, dtype=float), self.rate_floor) ** (self.n - 1.0)
+
+
+LAWS = {"piecewise_power": PiecewisePowerLaw, "power": PowerLaw}
+FlowLaw = PiecewisePowerLaw | PowerLaw

@@ -1,0 +1,41 @@
+"""Averaging at element centres or nodes, as the paper averages strain rates, pressures and stresses.
+
+Both are a lumped L2 projection: value_i = (integral of f * phi_i) / (integral of phi_i). Onto a
+piecewise-constant space this is the element mean ("centres"); onto a Lagrange space it is a
+weighted mean of the elements around each node ("nodes"). It needs no linear solve and is the
+same on any number of MPI ranks.
+"""
+from __future__ import annotations
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import ufl
+from petsc4py import PETSc
+
+from .compat import petsc_vec
+
+
+class LumpedProjector:
+    """Projects one UFL expression onto the space of ``target``; forms are compiled once."""
+
+    def __init__(self, expr: ufl.core.expr.Expr, target: dolfinx.fem.Function, quadrature_degree: int):
+        space = target.function_space
+        v = ufl.TestFunction(space)
+        dx = ufl.dx(domain=space.mesh, metadata={"quadrature_degree": quadrature_degree})
+        ones = ufl.as_vector([1.0] * space.num_sub_spaces) if space.num_sub_spaces else 1.0
+        self.target = target
+        self._form = dolfinx.fem.form(ufl.inner(expr, v) * dx)
+        self._weights = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.inner(ones, v) * dx))
+        self._weights.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self._weights.reciprocal()
+        self._rhs = self._weights.duplicate()
+
+    def project(self) -> dolfinx.fem.Function:
+        """Recompute the target from the current values of the expression's coefficients."""
+        with self._rhs.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(self._rhs, self._form)
+        self._rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        petsc_vec(self.target).pointwiseMult(self._rhs, self._weights)
+        self.target.x.scatter_forward()
+        return self.target

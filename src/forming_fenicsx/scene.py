@@ -1,0 +1,329 @@
+"""Scenes: the TOML input that says everything about one run, validated before any meshing.
+
+A scene has the sections ``process``, ``geometry``, ``material``, ``friction``, ``penalty``,
+``discretisation``, ``solver`` and ``output``. Every value has a default (the paper's value for the
+process); :func:`load_scene` rejects unknown keys, mistyped or non-physical values with a
+:class:`SceneError` that names the key and what is allowed.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import SceneError
+from .material import LAWS, FlowLaw, PiecewisePowerLaw
+
+PROCESSES = ("extrusion",)
+
+
+@dataclass
+class Process:
+    """What is formed and how: the process velocity u_N^0 on Gamma1 (2.5) and the force F_N on Gamma5 (2.7)."""
+
+    kind: str = "extrusion"
+    velocity: float = 1.0
+    applied_force: float | None = None
+
+    def check(self) -> None:
+        if self.kind not in PROCESSES:
+            raise SceneError("process.kind", f"must be one of {', '.join(PROCESSES)}; got {self.kind!r}")
+        if not (math.isfinite(self.velocity) and self.velocity > 0):
+            raise SceneError("process.velocity", f"must be a finite number > 0; got {self.velocity}")
+        if self.applied_force is not None and not math.isfinite(self.applied_force):
+            raise SceneError("process.applied_force", f"must be a finite number; got {self.applied_force}")
+
+
+@dataclass
+class ExtrusionGeometry:
+    """Plane-strain extrusion through a square die (Example 1); full thicknesses, half model built."""
+
+    length: float = 20.0
+    entry_thickness: float = 10.0
+    exit_thickness: float = 5.0
+    die_position: float = 10.0
+
+    def check(self) -> None:
+        for key in ("length", "entry_thickness", "exit_thickness", "die_position"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value > 0):
+                raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
+        if self.exit_thickness >= self.entry_thickness:
+            raise SceneError("geometry.exit_thickness",
+                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
+                             f"the die must reduce; got {self.exit_thickness}")
+        if self.die_position >= self.length:
+            raise SceneError("geometry.die_position",
+                             f"must be < geometry.length ({self.length}); got {self.die_position}")
+
+    @property
+    def thinnest(self) -> float:
+        """Half-thickness of the thinnest section (the half model's exit)."""
+        return 0.5 * self.exit_thickness
+
+    @property
+    def inlet_height(self) -> float:
+        """Height of Gamma1 in the half model."""
+        return 0.5 * self.entry_thickness
+
+
+@dataclass
+class Friction:
+    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11)."""
+
+    mu: float = 0.0
+    d_T: float = 1e-6
+
+    def check(self) -> None:
+        if not (math.isfinite(self.mu) and self.mu >= 0):
+            raise SceneError("friction.mu", f"must be a finite number >= 0; got {self.mu}")
+        if not (math.isfinite(self.d_T) and self.d_T > 0):
+            raise SceneError("friction.d_T", f"must be a finite number > 0; got {self.d_T}")
+
+
+@dataclass
+class Penalty:
+    """Penalty constants of (3.4): volumetric d and contact d_N."""
+
+    d: float = 1e-3
+    d_N: float = 1e-6
+
+    def check(self) -> None:
+        for key in ("d", "d_N"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value > 0):
+                raise SceneError(f"penalty.{key}", f"must be a finite number > 0; got {value}")
+
+
+@dataclass
+class Discretisation:
+    """Element, quadrature of the volumetric term, mesh size and grading toward the die corner."""
+
+    element: str = "Q2"
+    volumetric_integration: str = "reduced"
+    mesh_size: float = 0.5
+    corner_grading: float = 4.0
+    averaging: str = "nodes"
+
+    def check(self) -> None:
+        choices = {"element": ("Q1", "Q2"), "volumetric_integration": ("reduced", "complete"),
+                   "averaging": ("nodes", "centres")}
+        for key, allowed in choices.items():
+            if getattr(self, key) not in allowed:
+                raise SceneError(f"discretisation.{key}",
+                                 f"must be one of {', '.join(allowed)}; got {getattr(self, key)!r}")
+        if not (math.isfinite(self.mesh_size) and self.mesh_size > 0):
+            raise SceneError("discretisation.mesh_size", f"must be a finite number > 0; got {self.mesh_size}")
+        if not (math.isfinite(self.corner_grading) and 1 <= self.corner_grading <= 1e3):
+            raise SceneError("discretisation.corner_grading",
+                             "must lie in [1, 1000] (ratio of the largest to the smallest element "
+                             f"on a graded edge; 1 is uniform); got {self.corner_grading}")
+
+    @property
+    def degree(self) -> int:
+        return int(self.element[1])
+
+
+@dataclass
+class Solver:
+    """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4)."""
+
+    method: str = "modified"
+    tolerance: float = 1e-4
+    max_iterations: int = 200
+    max_outer_iterations: int = 50
+    reference_strain_rate: float | None = None
+    petsc_options: dict[str, Any] = field(default_factory=lambda: {
+        "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"})
+
+    def check(self) -> None:
+        if self.method not in ("direct", "modified"):
+            raise SceneError("solver.method", f"must be one of direct, modified; got {self.method!r}")
+        if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
+            raise SceneError("solver.tolerance", f"must lie in (0, 1) (delta of (4.4)); got {self.tolerance}")
+        for key in ("max_iterations", "max_outer_iterations"):
+            if getattr(self, key) < 1:
+                raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
+        rate = self.reference_strain_rate
+        if rate is not None and not (math.isfinite(rate) and rate > 0):
+            raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")
+        for key, value in self.petsc_options.items():
+            if not isinstance(value, (str, int, float, bool)):
+                raise SceneError(f"solver.petsc_options.{key}",
+                                 f"must be a string, number or boolean; got {type(value).__name__}")
+
+
+@dataclass
+class Output:
+    """What a run writes besides summary.json and history.csv."""
+
+    fields: bool = True
+    figures: bool = True
+
+    def check(self) -> None:
+        """Nothing to check beyond types."""
+
+
+GEOMETRIES = {"extrusion": ExtrusionGeometry}
+
+
+@dataclass
+class Scene:
+    """One run, fully specified."""
+
+    process: Process
+    geometry: ExtrusionGeometry
+    material: FlowLaw
+    friction: Friction
+    penalty: Penalty
+    discretisation: Discretisation
+    solver: Solver
+    output: Output
+
+    def check(self) -> None:
+        """Checks of each section, then of values that are valid alone but not together."""
+        for section in dataclasses.fields(self):
+            getattr(self, section.name).check()
+        if self.discretisation.mesh_size > self.geometry.thinnest:
+            raise SceneError("discretisation.mesh_size",
+                             f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
+                             f"at least one element spans it; got {self.discretisation.mesh_size}")
+
+    @property
+    def reference_strain_rate(self) -> float:
+        """Strain rate of the uniform starting modulus: the scene's, else velocity over entry thickness."""
+        given = self.solver.reference_strain_rate
+        return given if given is not None else self.process.velocity / self.geometry.entry_thickness
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every resolved value, section by section."""
+        return {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+
+def _typename(tp: Any) -> str:
+    names = {float: "a number", int: "an integer", str: "a string", bool: "true or false", dict: "a table"}
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if args:
+        return " or ".join(_typename(a) for a in args)
+    return names.get(typing.get_origin(tp) or tp, str(tp))
+
+
+def _coerce(key: str, value: Any, tp: Any) -> Any:
+    """Check a TOML value against a field type; integers are accepted where numbers are."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
+        for option in typing.get_args(tp):
+            if option is type(None):
+                continue
+            try:
+                return _coerce(key, value, option)
+            except SceneError:
+                pass
+        raise SceneError(key, f"must be {_typename(tp)}; got {value!r}")
+    base = origin or tp
+    ok = {float: isinstance(value, (int, float)) and not isinstance(value, bool),
+          int: isinstance(value, int) and not isinstance(value, bool),
+          bool: isinstance(value, bool), str: isinstance(value, str), dict: isinstance(value, dict)}[base]
+    if not ok:
+        raise SceneError(key, f"must be {_typename(tp)}; got {value!r}")
+    if base is float:
+        return float(value)
+    if base is dict:
+        return dict(value)
+    return value
+
+
+def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, Any] | None = None) -> Any:
+    hints = typing.get_type_hints(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(table) - set(names))
+    if unknown:
+        raise SceneError(f"{section}.{unknown[0]}",
+                         f"unknown key; allowed keys in [{section}]: {', '.join(names)}")
+    values = dict(defaults or {})
+    for key, value in table.items():
+        values[key] = _coerce(f"{section}.{key}", value, hints[key])
+    return cls(**values)
+
+
+def _material(table: dict[str, Any]) -> FlowLaw:
+    law = table.get("law", PiecewisePowerLaw.law)
+    if law not in LAWS:
+        raise SceneError("material.law", f"must be one of {', '.join(LAWS)}; got {law!r}")
+    return _build(LAWS[law], table, "material")
+
+
+SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output")
+
+
+def scene_from_dict(data: dict[str, Any]) -> Scene:
+    """Build and check a scene from a parsed TOML document."""
+    unknown = sorted(set(data) - set(SECTIONS))
+    if unknown:
+        raise SceneError(unknown[0], f"unknown section; allowed sections: {', '.join(SECTIONS)}")
+    for name in SECTIONS:
+        if name in data and not isinstance(data[name], dict):
+            raise SceneError(name, f"must be a table ([{name}]); got {data[name]!r}")
+    tables = {name: data.get(name, {}) for name in SECTIONS}
+    if "kind" not in tables["process"]:
+        raise SceneError("process.kind", f"missing; must be one of {', '.join(PROCESSES)}")
+    process = _build(Process, tables["process"], "process")
+    process.check()
+    scene = Scene(
+        process=process,
+        geometry=_build(GEOMETRIES[process.kind], tables["geometry"], "geometry"),
+        material=_material(tables["material"]),
+        friction=_build(Friction, tables["friction"], "friction"),
+        penalty=_build(Penalty, tables["penalty"], "penalty"),
+        discretisation=_build(Discretisation, tables["discretisation"], "discretisation"),
+        solver=_build(Solver, tables["solver"], "solver"),
+        output=_build(Output, tables["output"], "output"),
+    )
+    scene.check()
+    return scene
+
+
+def parse_override(text: str) -> tuple[list[str], Any]:
+    """Split ``section.key=value``; the value is read as TOML, else taken as a bare string."""
+    if "=" not in text:
+        raise SceneError(text, "an override must look like section.key=value")
+    path, raw = text.split("=", 1)
+    keys = path.strip().split(".")
+    if len(keys) < 2 or not all(keys):
+        raise SceneError(path, "an override must name section.key")
+    if not raw.strip():
+        raise SceneError(path, "missing value after '='")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return keys, value
+
+
+def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
+    """Apply ``--set section.key=value`` overrides to a parsed scene document."""
+    for text in overrides:
+        keys, value = parse_override(text)
+        table = data
+        for depth, key in enumerate(keys[:-1]):
+            table = table.setdefault(key, {})
+            if not isinstance(table, dict):
+                raise SceneError(".".join(keys[: depth + 1]), "is a value, not a table")
+        table[keys[-1]] = value
+    return data
+
+
+def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
+    """Read, override and validate a scene file."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(str(path), "scene file not found") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError(str(path), f"not valid TOML: {exc}") from None
+    return scene_from_dict(apply_overrides(data, overrides or []))

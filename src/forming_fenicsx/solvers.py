@@ -1,0 +1,158 @@
+"""Secant-modulus iterations: the direct method (3.13) and the modified method (3.33).
+
+Each iterate solves the linear system K(u_n, u_{0,m}) u_{n+1} = F of (4.4) with a PETSc KSP (MUMPS LU by
+default) and stops when ||u_{n+1} - u_n|| / ||u_{n+1}|| < delta.
+"""
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+from petsc4py import PETSc
+
+from .compat import petsc_vec
+from .forms import FlowProblem
+
+log = logging.getLogger(__name__)
+_prefixes = itertools.count()
+
+
+class LinearSolver:
+    """Matrix, right-hand side and KSP of one problem, created once and reused by every iterate."""
+
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any]):
+        self.problem = problem
+        self.A = dolfinx.fem.petsc.create_matrix(problem.a)
+        self.b = self.A.createVecLeft()
+        self.ksp = PETSc.KSP().create(problem.comm)
+        prefix = f"forming_{next(_prefixes)}_"
+        self.ksp.setOptionsPrefix(prefix)
+        options = PETSc.Options()
+        for key, value in petsc_options.items():
+            options[prefix + key] = value
+        self.ksp.setFromOptions()
+        self.A.setOptionsPrefix(prefix)
+        self.A.setFromOptions()
+        self.ksp.setOperators(self.A)
+        for key in petsc_options:
+            options.delValue(prefix + key)
+
+    def solve(self) -> None:
+        """Assemble K and F at the problem's current state and solve into problem.u."""
+        problem = self.problem
+        self.A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(self.A, problem.a, bcs=problem.bcs)
+        self.A.assemble()
+        with self.b.localForm() as local:
+            local.set(0.0)
+        if problem.L is not None:
+            dolfinx.fem.petsc.assemble_vector(self.b, problem.L)
+        dolfinx.fem.petsc.apply_lifting(self.b, [problem.a], bcs=[problem.bcs])
+        self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(self.b, problem.bcs)
+        self.ksp.solve(self.b, petsc_vec(problem.u))
+        reason = self.ksp.getConvergedReason()
+        if reason < 0:
+            raise RuntimeError(f"linear solve failed (KSP reason {reason})")
+        problem.u.x.scatter_forward()
+
+    def destroy(self) -> None:
+        self.ksp.destroy()
+        self.A.destroy()
+        self.b.destroy()
+
+
+@dataclass
+class IterationRecord:
+    """One linear solve: outer index m, inner index n, relative increment, elapsed seconds."""
+
+    outer: int
+    inner: int
+    increment: float
+    elapsed: float
+
+
+@dataclass
+class SolveResult:
+    converged: bool
+    reason: str
+    linear_solves: int = 0
+    outer_iterations: int = 0
+    history: list[IterationRecord] = field(default_factory=list)
+
+
+class SecantSolver:
+    """The direct (3.13) or modified (3.33) secant-modulus method for a FlowProblem."""
+
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None):
+        self.problem = problem
+        settings = problem.scene.solver
+        self.settings = settings
+        self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
+        self._previous = problem.u.copy()
+
+    def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
+        """One linear solve from the current state; records and returns the relative increment."""
+        u, previous = petsc_vec(self.problem.u), petsc_vec(self._previous)
+        u.copy(previous)
+        self.linear.solve()
+        result.linear_solves += 1
+        norm = u.norm()
+        previous.axpy(-1.0, u)
+        increment = previous.norm() / norm if norm > 0 else math.inf
+        record = IterationRecord(outer, inner, increment, time.perf_counter() - start)
+        result.history.append(record)
+        if self.problem.comm.rank == 0:
+            log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment, record.elapsed)
+        return increment
+
+    def solve(self) -> SolveResult:
+        """Iterate from a uniform modulus until the stopping rule of (4.4) holds."""
+        problem, settings = self.problem, self.settings
+        delta, method = settings.tolerance, settings.method
+        start = time.perf_counter()
+        result = SolveResult(converged=False, reason="")
+        problem.set_uniform_secant(problem.scene.reference_strain_rate)
+        self._step(result, 0, 0, start)
+        outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
+        for outer in range(outer_limit):
+            result.outer_iterations = outer + 1
+            outer_start = problem.u.copy()
+            if method == "modified":
+                problem.freeze_friction(problem.u)
+            for inner in range(1, settings.max_iterations + 1):
+                problem.update_state(problem.u, friction_too=(method == "direct"))
+                increment = self._step(result, outer, inner, start)
+                if not math.isfinite(increment):
+                    result.reason = f"non-finite increment at outer {outer}, inner {inner}"
+                    return result
+                if increment < delta:
+                    break
+            else:
+                result.reason = (f"no convergence in {settings.max_iterations} iterations "
+                                 f"(last increment {increment:.3e} >= delta {delta:g})")
+                return result
+            if outer_limit == 1:
+                break
+            change = petsc_vec(outer_start)
+            change.axpy(-1.0, petsc_vec(problem.u))
+            outer_increment = change.norm() / petsc_vec(problem.u).norm()
+            if problem.comm.rank == 0:
+                log.info("outer %d done: ||u0,m+1 - u0,m||/||u0,m+1|| = %.3e", outer, outer_increment)
+            if outer_increment < delta:
+                break
+        else:
+            result.reason = (f"no convergence of the friction (outer) loop in {settings.max_outer_iterations} "
+                             f"iterations (last change {outer_increment:.3e}); at this friction coefficient "
+                             "the solution may not be unique")
+            return result
+        result.converged = True
+        result.reason = "increment below tolerance"
+        problem.update_state(problem.u, friction_too=True)
+        return result
