@@ -9,6 +9,3 @@ class SceneError(ValueError):
         self.key = key
         self.message = message
 
-
-class NotConvergedError(RuntimeError):
-    """The nonlinear iteration stopped before reaching its tolerance."""

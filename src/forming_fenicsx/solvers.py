@@ -154,5 +154,4 @@ class SecantSolver:
             return result
         result.converged = True
         result.reason = "increment below tolerance"
-        problem.update_state(problem.u, friction_too=True)
         return result

@@ -1,0 +1,113 @@
+"""The ``forming`` command: ``forming run SCENE`` and ``forming mesh SCENE -o FILE``.
+
+Arguments after a lone ``--`` are PETSc options (``-- -ksp_type preonly -pc_type lu``) and take
+precedence over the scene's ``solver.petsc_options``.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from .errors import SceneError
+
+log = logging.getLogger("forming_fenicsx")
+
+
+def petsc_options_from_args(args: list[str]) -> dict[str, str]:
+    """``-key value`` / ``-flag`` pairs to a dict without the leading dash."""
+    options: dict[str, str] = {}
+    i = 0
+    while i < len(args):
+        key = args[i]
+        if not key.startswith("-") or len(key) < 2:
+            raise SceneError(key, "PETSc options after '--' must look like -name [value]")
+        value = ""
+        if i + 1 < len(args) and not (args[i + 1].startswith("-") and not _is_number(args[i + 1])):
+            value = args[i + 1]
+            i += 1
+        options[key.lstrip("-")] = value
+        i += 1
+    return options
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="forming", description="Steady-state metal forming (Angelov 2014).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="solve a scene and write its results")
+    run.add_argument("scene", help="scene TOML file")
+    run.add_argument("--out", help="output folder (default: results/<scene name>)")
+    run.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                     help="override a scene value (repeatable)")
+    run.add_argument("--quiet", action="store_true", help="log warnings only")
+    mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
+    mesh.add_argument("scene", help="scene TOML file")
+    mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
+    mesh.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    return parser
+
+
+def _configure_logging(quiet: bool, rank: int) -> None:
+    """The application's own handler, on rank 0 only; the root logger is left alone."""
+    log.propagate = False
+    if rank == 0:
+        handler = logging.StreamHandler(sys.stdout)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        log.addHandler(handler)
+    else:
+        log.addHandler(logging.NullHandler())
+    log.setLevel(logging.WARNING if quiet else logging.INFO)
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    petsc_args: list[str] = []
+    if "--" in argv:
+        split = argv.index("--")
+        argv, petsc_args = argv[:split], argv[split + 1:]
+    args = _parser().parse_args(argv)
+
+    from mpi4py import MPI
+
+    from .scene import load_scene
+
+    comm = MPI.COMM_WORLD
+    try:
+        scene = load_scene(args.scene, args.set)
+        petsc_options = petsc_options_from_args(petsc_args)
+    except SceneError as error:
+        if comm.rank == 0:
+            print(f"forming: invalid scene {args.scene}: {error}", file=sys.stderr)
+        return 2
+
+    if args.command == "mesh":
+        if comm.rank == 0:
+            from .geometry import write_msh
+
+            print(write_msh(scene, args.output))
+        return 0
+
+    from .run import run_scene
+
+    _configure_logging(args.quiet, comm.rank)
+    out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
+    summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem)
+    if not summary["converged"]:
+        if comm.rank == 0:
+            print(f"forming: not converged: {summary['reason']}; the last iterate's results are in {out}",
+                  file=sys.stderr)
+        return 3
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

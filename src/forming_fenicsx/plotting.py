@@ -1,0 +1,82 @@
+"""PNG figures in the manner of the paper's Fig. 3 and 4: velocity vectors and the equivalent strain-rate map."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .compat import cell_geometry_nodes
+from .forms import FlowProblem
+from .kinematics import equivalent_strain_rate
+from .postprocess import cell_means
+
+QUAD_OUTLINE = [0, 1, 3, 2]  # dolfinx quadrilateral vertices in tensor order -> polygon order
+
+
+def _gather_cells(problem: FlowProblem):
+    """Cell outlines, cell-mean velocity and equivalent strain rate of every cell, on rank 0."""
+    mesh = problem.mesh
+    owned = mesh.topology.index_map(mesh.topology.dim).size_local
+    nodes = cell_geometry_nodes(mesh)[:owned][:, QUAD_OUTLINE]
+    outlines = mesh.geometry.x[nodes][:, :, :2]
+    degree = problem.full_degree
+    rate = cell_means(problem, equivalent_strain_rate(problem.u), "rate", degree).x.array[:owned]
+    ux = cell_means(problem, problem.u[0], "ux", degree).x.array[:owned]
+    uy = cell_means(problem, problem.u[1], "uy", degree).x.array[:owned]
+    parts = problem.comm.gather((outlines, rate, ux, uy), root=0)
+    if problem.comm.rank != 0:
+        return None
+    return [np.concatenate(p) for p in zip(*parts)]
+
+
+def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Path]:
+    """velocity.png and strain_rate.png (collective; rank 0 draws)."""
+    data = _gather_cells(problem)
+    if data is None:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import LogNorm
+
+    outlines, rate, ux, uy = data
+    centres = outlines.mean(axis=1)
+    extent = np.ptp(outlines.reshape(-1, 2), axis=0)
+    size = (10, max(2.5, 10 * extent[1] / extent[0] + 1.0))
+    paths = []
+
+    fig, ax = plt.subplots(figsize=size)
+    ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.8", linewidths=0.3))
+    stride = max(1, len(centres) // 600)
+    ax.quiver(centres[::stride, 0], centres[::stride, 1], ux[::stride], uy[::stride], angles="xy",
+              scale_units="xy", scale=np.abs(ux).max() / (0.6 * np.sqrt(extent.prod() / len(centres) * stride)),
+              width=0.002)
+    ax.set_title(f"{title}: velocity vectors")
+    paths.append(_finish(fig, ax, outlines, directory / "velocity.png"))
+
+    fig, ax = plt.subplots(figsize=size)
+    floor = max(rate.max() * 1e-4, 1e-12)
+    cells = PolyCollection(outlines, array=np.maximum(rate, floor), cmap="jet",
+                           norm=LogNorm(vmin=floor, vmax=max(rate.max(), 2 * floor)), edgecolors="face")
+    ax.add_collection(cells)
+    fig.colorbar(cells, ax=ax, label="equivalent strain rate")
+    ax.set_title(f"{title}: equivalent strain rate")
+    paths.append(_finish(fig, ax, outlines, directory / "strain_rate.png"))
+    return paths
+
+
+def _finish(fig, ax, outlines: np.ndarray, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    points = outlines.reshape(-1, 2)
+    ax.set_xlim(points[:, 0].min(), points[:, 0].max())
+    ax.set_ylim(points[:, 1].min(), points[:, 1].max())
+    ax.set_aspect("equal")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path

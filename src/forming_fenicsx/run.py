@@ -1,0 +1,65 @@
+"""One run, in the order data flows: scene -> mesh -> forms -> solver -> results -> files."""
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+import dolfinx
+from mpi4py import MPI
+
+from .forms import FlowProblem
+from .geometry import build_mesh
+from .output import write_fields, write_history, write_summary
+from .plotting import write_figures
+from .postprocess import output_fields, scalars
+from .scene import Scene
+from .solvers import SecantSolver, SolveResult
+
+log = logging.getLogger(__name__)
+
+
+def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
+                comm: MPI.Comm = MPI.COMM_WORLD) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+    """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary."""
+    start = time.perf_counter()
+    problem = FlowProblem(scene, build_mesh(scene, comm))
+    solver = SecantSolver(problem, petsc_options)
+    result = solver.solve()
+    solver.linear.destroy()
+    problem.update_state(problem.u, friction_too=True)
+    summary = {
+        "scene": scene.to_dict(),
+        "dolfinx_version": dolfinx.__version__,
+        "mpi_ranks": comm.size,
+        "dofs": problem.V.dofmap.index_map.size_global * problem.V.dofmap.index_map_bs,
+        "converged": result.converged,
+        "reason": result.reason,
+        "linear_solves": result.linear_solves,
+        "outer_iterations": result.outer_iterations,
+        **scalars(problem),
+        "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
+    }
+    return problem, result, summary
+
+
+def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
+              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "") -> dict[str, Any]:
+    """Solve a scene and write summary.json, history.csv, fields.xdmf and the figures into ``out``."""
+    out = Path(out)
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    problem, result, summary = solve_scene(scene, petsc_options, comm)
+    if scene.output.fields:
+        write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
+    if scene.output.figures:
+        write_figures(problem, out, title or scene.process.kind)
+    if comm.rank == 0:
+        write_history(out / "history.csv", result.history)
+        write_summary(out / "summary.json", summary)
+        log.info("ram pressure %.4f, p_av %.4f, force balance residual %.2e, %d linear solves, %.1f s",
+                 summary["ram_pressure"], summary["mean_hydrostatic_pressure"],
+                 summary["force_balance_residual"], summary["linear_solves"], summary["wall_time_s"])
+    return summary
