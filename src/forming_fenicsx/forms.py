@@ -15,7 +15,7 @@ from petsc4py import PETSc
 from . import contact, friction
 from .compat import function_space, petsc_vec
 from .geometry import ROLES, FormingMesh
-from .kinematics import deviatoric_product, equivalent_strain_rate, strain_rate
+from .kinematics import deviatoric, deviatoric_product, equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 from .scene import Scene
 
@@ -39,6 +39,7 @@ class FlowProblem:
         self.mesh = mesh = forming_mesh.mesh
         self.roles = forming_mesh.roles
         self.facet_tags = forming_mesh.facet_tags
+        self.constraints = forming_mesh.constraints
         self.comm = mesh.comm
         k = scene.discretisation.degree
         self.V = function_space(mesh, "P", k, (2,))
@@ -86,6 +87,11 @@ class FlowProblem:
         """Penalty incompressibility (1/d) int div u div v of (3.5), complete or reduced Gauss."""
         return 1.0 / self.scene.penalty.d * ufl.div(u) * ufl.div(v) * self.dx_vol
 
+    def stress(self):
+        """In-plane Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4) and sigma_H = div(u)/d (3.4)."""
+        e = strain_rate(self.u)
+        return 2.0 / 3.0 * self.secant * deviatoric(e) + ufl.div(self.u) / self.scene.penalty.d * ufl.Identity(2)
+
     @property
     def ds_contact(self):
         return self.ds(ROLES["gamma3_contact"])
@@ -120,11 +126,9 @@ class FlowProblem:
         return self.facet_tags.indices[self.facet_tags.values == ROLES[role]]
 
     def _boundary_conditions(self) -> list:
-        """u_N = u_N^0 on Gamma1 (2.5) as u_x = velocity, u_N = 0 on Gamma6 (2.8) as u_y = 0."""
-        velocity = PETSc.ScalarType(self.scene.process.velocity)
-        return [dolfinx.fem.dirichletbc(velocity, self.boundary_dofs("gamma1_velocity", 0), self.V.sub(0)),
-                dolfinx.fem.dirichletbc(PETSc.ScalarType(0.0), self.boundary_dofs("gamma6_symmetry", 1),
-                                        self.V.sub(1))]
+        """The mesh's constraints: u_N = u_N^0 on Gamma1 (2.5) and u_N = 0 on Gamma6 (2.8)."""
+        return [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value), self.boundary_dofs(c.role, c.component),
+                                        self.V.sub(c.component)) for c in self.constraints]
 
     # -- secant state ---------------------------------------------------------------------------
     def set_uniform_secant(self, rate: float) -> None:

@@ -21,13 +21,23 @@ ROLES = {"gamma1_velocity": 1, "gamma2_free": 2, "gamma3_contact": 3,
 WORKPIECE = 1
 
 
+@dataclass(frozen=True)
+class Constraint:
+    """A prescribed velocity component on a boundary role: (2.5) on Gamma1, (2.8) on Gamma6."""
+
+    role: str
+    component: int
+    value: float
+
+
 @dataclass
 class FormingMesh:
-    """A dolfinx mesh with its facet tags (values from ROLES) and the roles present."""
+    """A dolfinx mesh with its facet tags (values from ROLES), the roles present and the constraints."""
 
     mesh: object
     facet_tags: object
     roles: dict[str, int]
+    constraints: list[Constraint]
 
 
 def graded_edge(length: float, size: float, grading: float, toward_end: bool) -> tuple[int, float]:
@@ -138,7 +148,9 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     present = set(int(v) for v in facet_tags.values)
     present = set().union(*comm.allgather(present))
     roles = {name: tag for name, tag in ROLES.items() if tag in present}
-    return FormingMesh(mesh, facet_tags, roles)
+    # Gamma1 and Gamma6 are normal to x and y in both processes: u_x = u_N^0 and u_y = 0.
+    constraints = [Constraint("gamma1_velocity", 0, scene.process.velocity), Constraint("gamma6_symmetry", 1, 0.0)]
+    return FormingMesh(mesh, facet_tags, roles, constraints)
 
 
 def write_msh(scene: Scene, path: str | Path) -> Path:

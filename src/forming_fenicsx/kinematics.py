@@ -9,6 +9,11 @@ def strain_rate(u):
     return ufl.sym(ufl.grad(u))
 
 
+def deviatoric(e):
+    """In-plane part of the plane-strain deviator e - tr(e)/3 I."""
+    return e - ufl.tr(e) / 3.0 * ufl.Identity(2)
+
+
 def deviatoric_product(e1, e2):
     """e1':e2' with the plane-strain deviator of the 3-D tensor (zz component zero before deviation)."""
     return ufl.inner(e1, e2) - ufl.tr(e1) * ufl.tr(e2) / 3.0

@@ -30,11 +30,13 @@ def hydrostatic_pressure(problem: FlowProblem):
     return ufl.div(problem.u) / problem.scene.penalty.d
 
 
-def reaction_x(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
-    """x-force the constraint on ``role`` exerts on the workpiece: the residual summed over its x-dofs."""
+def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
+    """Force the constraint on ``role`` exerts on the workpiece along its component: the residual summed
+    over the constrained dofs."""
     residual = dolfinx.fem.petsc.assemble_vector(problem.residual)
     residual.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    dofs = problem.boundary_dofs(role, 0)
+    component = next(c.component for c in problem.constraints if c.role == role)
+    dofs = problem.boundary_dofs(role, component)
     owned = problem.V.dofmap.index_map.size_local * problem.V.dofmap.index_map_bs
     value = residual.getArray(readonly=True)[dofs[dofs < owned]].sum()
     residual.destroy()
@@ -81,7 +83,7 @@ def mean_hydrostatic_pressure(problem: FlowProblem) -> float:
 def scalars(problem: FlowProblem) -> dict[str, float]:
     """The summary numbers of a run (ram pressure, p_av, die force and the x force balance)."""
     height = problem.scene.geometry.inlet_height
-    ram = reaction_x(problem)
+    ram = reaction(problem)
     die_normal, die_friction = die_forces_x(problem)
     die = die_normal + die_friction
     external = applied_force_x(problem)

@@ -29,7 +29,7 @@ class LinearSolver:
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any]):
         self.problem = problem
         self.A = dolfinx.fem.petsc.create_matrix(problem.a)
-        self.b = self.A.createVecLeft()
+        self.b = dolfinx.fem.petsc.create_vector(problem.residual)
         self.ksp = PETSc.KSP().create(problem.comm)
         prefix = f"forming_{next(_prefixes)}_"
         self.ksp.setOptionsPrefix(prefix)
@@ -40,8 +40,6 @@ class LinearSolver:
         self.A.setOptionsPrefix(prefix)
         self.A.setFromOptions()
         self.ksp.setOperators(self.A)
-        for key in petsc_options:
-            options.delValue(prefix + key)
 
     def solve(self) -> None:
         """Assemble K and F at the problem's current state and solve into problem.u."""
