@@ -56,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _configure_logging(quiet: bool, rank: int) -> None:
+def configure_logging(quiet: bool, rank: int) -> None:
     """The application's own handler, on rank 0 only; the root logger is left alone."""
     log.propagate = False
     if rank == 0:
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from .run import run_scene
 
-    _configure_logging(args.quiet, comm.rank)
+    configure_logging(args.quiet, comm.rank)
     out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
     summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem)
     if not summary["converged"]:

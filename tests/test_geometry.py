@@ -1,0 +1,84 @@
+"""Gmsh half models: boundary roles, dimensions, grading toward the die corner, .msh output."""
+import dolfinx.fem
+import gmsh
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+
+from forming_fenicsx.compat import cell_geometry_nodes
+from forming_fenicsx.geometry import ROLES, build_mesh, graded_edge, write_msh
+
+from conftest import make_scene
+
+
+def integrate(mesh, integrand) -> float:
+    return mesh.comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand)))
+
+
+@pytest.mark.parametrize("element", ["Q1", "Q2"])
+def test_extrusion_roles_and_measures(element):
+    scene = make_scene(geometry={"length": 16.0, "entry_thickness": 8.0, "exit_thickness": 3.0,
+                                 "die_position": 6.0},
+                       discretisation={"element": element, "mesh_size": 0.5})
+    fm = build_mesh(scene)
+    mesh = fm.mesh
+    assert mesh.geometry.cmap.degree == int(element[1])
+    assert set(fm.roles) == {"gamma1_velocity", "gamma2_free", "gamma3_contact", "gamma4_free", "gamma6_symmetry"}
+    one = dolfinx.fem.Constant(mesh, 1.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=fm.facet_tags)
+    assert integrate(mesh, one * ufl.dx) == pytest.approx(6 * 4 + 10 * 1.5, rel=1e-12)
+    lengths = {"gamma1_velocity": 4.0, "gamma2_free": 10.0, "gamma3_contact": 6.0 + 2.5,
+               "gamma4_free": 1.5, "gamma6_symmetry": 16.0}
+    for role, length in lengths.items():
+        assert integrate(mesh, one * ds(ROLES[role])) == pytest.approx(length, rel=1e-12)
+    assert integrate(mesh, one * ufl.ds) == pytest.approx(sum(lengths.values()), rel=1e-12)  # every facet has a role
+
+
+def test_applied_force_makes_gamma5():
+    fm = build_mesh(make_scene(process={"applied_force": 0.5}, discretisation={"mesh_size": 1.0}))
+    assert "gamma5_force" in fm.roles and "gamma4_free" not in fm.roles
+
+
+def test_graded_edge_ratio():
+    elements, progression = graded_edge(10.0, 1.0, 8.0, toward_end=True)
+    sizes = progression ** np.arange(elements)
+    assert elements == 10
+    assert sizes[0] / sizes[-1] == pytest.approx(8.0, rel=1e-12)
+    assert graded_edge(10.0, 1.0, 1.0, toward_end=True) == (10, 1.0)
+
+
+def smallest_cell_near(fm, point) -> float:
+    """Bounding-box diagonal of the owned cell nearest to ``point`` (over all ranks)."""
+    mesh = fm.mesh
+    owned = mesh.topology.index_map(2).size_local
+    corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned, :4]][:, :, :2]
+    if owned == 0:
+        return mesh.comm.allreduce((np.inf, np.inf), op=MPI.MIN)[1]
+    distance = np.linalg.norm(corners.mean(axis=1) - point, axis=1)
+    diagonal = np.linalg.norm(np.ptp(corners, axis=1), axis=1)
+    nearest = distance.argmin()
+    return mesh.comm.allreduce((distance[nearest], diagonal[nearest]), op=MPI.MIN)[1]
+
+
+def test_corner_grading_refines_toward_die_corner():
+    sizes = [smallest_cell_near(build_mesh(make_scene(discretisation={"mesh_size": 0.5, "corner_grading": g})),
+                                np.array([10.0, 2.5])) for g in (1.0, 8.0)]
+    assert sizes[0] == pytest.approx(0.5 * 2**0.5, rel=1e-9)
+    assert sizes[1] < sizes[0] / 3
+
+
+def test_msh_file_has_named_roles(tmp_path):
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    path = write_msh(make_scene(discretisation={"mesh_size": 1.0}), tmp_path / "ex1.msh")
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        names = {gmsh.model.getPhysicalName(dim, tag) for dim, tag in gmsh.model.getPhysicalGroups()}
+        _, _, nodes = gmsh.model.mesh.getElements(2)
+    finally:
+        gmsh.finalize()
+    assert {"workpiece", "gamma1_velocity", "gamma3_contact", "gamma6_symmetry"} <= names
+    assert len(nodes[0]) % 9 == 0  # nine-node quadrilaterals by default (Q2)

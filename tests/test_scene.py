@@ -1,0 +1,107 @@
+"""Scene loading: defaults, overrides, and one clear message naming the key for every bad value."""
+from pathlib import Path
+
+import pytest
+
+from forming_fenicsx.cli import main, petsc_options_from_args
+from forming_fenicsx.errors import SceneError
+from forming_fenicsx.scene import load_scene, scene_from_dict
+
+DEMOS = Path(__file__).parents[1] / "demos"
+
+
+def test_defaults_are_the_papers_example1():
+    scene = scene_from_dict({"process": {"kind": "extrusion"}})
+    assert (scene.geometry.length, scene.geometry.entry_thickness, scene.geometry.exit_thickness) == (20, 10, 5)
+    assert scene.material.A == pytest.approx(3**0.5)
+    assert (scene.material.alpha, scene.material.rate1, scene.material.rate2) == (1e-3, 1e-3, 1e3)
+    assert (scene.penalty.d, scene.penalty.d_N, scene.friction.d_T) == (1e-3, 1e-6, 1e-6)
+    assert (scene.discretisation.element, scene.discretisation.volumetric_integration) == ("Q2", "reduced")
+    assert scene.solver.tolerance == 1e-4
+
+
+def test_demo_scenes_load():
+    assert load_scene(DEMOS / "example1_extrusion.toml").friction.mu == 0.0
+    assert load_scene(DEMOS / "example1_extrusion_mu01.toml").friction.mu == 0.1
+
+
+def test_overrides_take_toml_values_and_bare_strings():
+    scene = load_scene(DEMOS / "example1_extrusion.toml",
+                       ["friction.mu=0.25", "discretisation.element=Q1", "solver.petsc_options.ksp_type=cg"])
+    assert scene.friction.mu == 0.25
+    assert scene.discretisation.element == "Q1"
+    assert scene.solver.petsc_options["ksp_type"] == "cg"
+
+
+BAD = [
+    ({"geometry": {"entry_thickness": 0.0}}, "geometry.entry_thickness", "> 0"),
+    ({"geometry": {"exit_thickness": 10.0}}, "geometry.exit_thickness", "must be <"),
+    ({"geometry": {"exit_thickness": 12.0}}, "geometry.exit_thickness", "reduce"),
+    ({"geometry": {"die_position": 25.0}}, "geometry.die_position", "geometry.length"),
+    ({"friction": {"mu": -0.1}}, "friction.mu", ">= 0"),
+    ({"friction": {"d_T": 0.0}}, "friction.d_T", "> 0"),
+    ({"penalty": {"d": 0.0}}, "penalty.d", "> 0"),
+    ({"penalty": {"d_N": -1e-6}}, "penalty.d_N", "> 0"),
+    ({"solver": {"tolerance": 0.0}}, "solver.tolerance", "(0, 1)"),
+    ({"solver": {"method": "newton"}}, "solver.method", "direct, modified"),
+    ({"solver": {"max_iterations": 0}}, "solver.max_iterations", ">= 1"),
+    ({"solver": {"max_iterations": 2.5}}, "solver.max_iterations", "an integer"),
+    ({"material": {"alpha": 1.5}}, "material.alpha", "(2.10)"),
+    ({"material": {"law": "power", "n": 2.0}}, "material.n", "(2.10)"),
+    ({"material": {"law": "power", "alpha": 0.5}}, "material.alpha", "unknown key"),
+    ({"material": {"law": "voce"}}, "material.law", "piecewise_power, power"),
+    ({"discretisation": {"element": "Q3"}}, "discretisation.element", "Q1, Q2"),
+    ({"discretisation": {"mesh_size": 3.0}}, "discretisation.mesh_size", "thinnest"),
+    ({"discretisation": {"corner_grading": 0.5}}, "discretisation.corner_grading", "[1, 1000]"),
+    ({"penalty": {"d": "small"}}, "penalty.d", "a number"),
+    ({"penalty": {"d": True}}, "penalty.d", "a number"),
+    ({"process": {"velocity": float("nan")}}, "process.velocity", "finite"),
+    ({"process": {"colour": "red"}}, "process.colour", "unknown key"),
+    ({"processes": {}}, "processes", "unknown section"),
+    ({"process": {"kind": "rolling"}}, "process.kind", "extrusion"),
+]
+
+
+@pytest.mark.parametrize("sections, key, phrase", BAD, ids=[b[1] for b in BAD])
+def test_invalid_values_name_the_key(sections, key, phrase):
+    data = {"process": {"kind": "extrusion"}}
+    for name, values in sections.items():
+        data.setdefault(name, {}).update(values)
+    with pytest.raises(SceneError) as error:
+        scene_from_dict(data)
+    assert error.value.key == key
+    assert phrase in error.value.message
+
+
+def test_missing_process_kind():
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"geometry": {"length": 20.0}})
+    assert error.value.key == "process.kind"
+
+
+def test_cli_rejects_bad_scene_before_meshing(tmp_path, capsys):
+    scene = tmp_path / "bad.toml"
+    scene.write_text('[process]\nkind = "extrusion"\n[geometry]\nexit_thickness = 11.0\n')
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "geometry.exit_thickness" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_cli_rejects_bad_override_and_toml(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(DEMOS / "example1_extrusion.toml"), "--out", str(out), "--set", "penalty.dd=1"]) == 2
+    assert "penalty.dd" in capsys.readouterr().err
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[process\nkind = 1\n")
+    assert main(["run", str(broken), "--out", str(out)]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_petsc_options_from_command_line():
+    assert petsc_options_from_args(["-ksp_type", "preonly", "-ksp_view", "-mat_mumps_icntl_14", "-50"]) == {
+        "ksp_type": "preonly", "ksp_view": "", "mat_mumps_icntl_14": "-50"}
+    with pytest.raises(SceneError):
+        petsc_options_from_args(["ksp_type"])
