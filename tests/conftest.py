@@ -1,6 +1,7 @@
 """Shared fixtures; every test runs serially and under ``mpirun -n 2 python -m mpi4py -m pytest``."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -23,21 +24,17 @@ def make_scene(**sections) -> Scene:
     return scene_from_dict(data)
 
 
-# Example 1 on a coarse mesh (h = 0.5, grading 8): a few seconds per solve.
+# Example 1 on a coarse mesh (h = 0.5, grading 8): about a second per solve.
 COARSE = {"mesh_size": 0.5, "corner_grading": 8.0}
+_solved: dict[str, dict] = {}
 
 
-@pytest.fixture(scope="session")
-def coarse_example1():
-    """Example 1, mu = 0, direct method, coarse mesh: (problem, result, summary)."""
+def solved(**sections) -> dict:
+    """Summary of Example 1 on the coarse mesh with the given section overrides, solved once per session."""
     from forming_fenicsx.run import solve_scene
 
-    return solve_scene(make_scene(discretisation=COARSE, solver={"method": "direct"}))
-
-
-@pytest.fixture(scope="session")
-def coarse_example1_friction():
-    """Example 1, mu = 0.1, direct method, coarse mesh: (problem, result, summary)."""
-    from forming_fenicsx.run import solve_scene
-
-    return solve_scene(make_scene(discretisation=COARSE, friction={"mu": 0.1}, solver={"method": "direct"}))
+    sections["discretisation"] = {**COARSE, **sections.get("discretisation", {})}
+    key = json.dumps(sections, sort_keys=True)
+    if key not in _solved:
+        _solved[key] = solve_scene(make_scene(**sections))[2]
+    return _solved[key]

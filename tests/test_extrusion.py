@@ -1,0 +1,75 @@
+"""Example 1 (square-die extrusion) on coarse meshes: slip-line pressure, force balance, friction,
+both secant methods, the penalty's effect on p_av, and the same numbers on 1 and 2 ranks."""
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from forming_fenicsx.run import solve_scene
+
+from conftest import make_scene, solved
+
+HILL = 1 + math.pi / 2  # ram pressure / k, frictionless square die, reduction 1/2
+DIRECT = {"method": "direct"}
+
+
+def test_frictionless_ram_pressure_and_force_balance():
+    coarse = solved(solver=DIRECT)
+    fine = solved(solver=DIRECT, discretisation={"mesh_size": 0.25})
+    assert coarse["converged"] and fine["converged"]
+    assert coarse["force_balance_residual"] < 1e-3 and fine["force_balance_residual"] < 1e-3
+    assert abs(coarse["ram_pressure"] / HILL - 1) < 0.17
+    assert abs(fine["ram_pressure"] / HILL - 1) < 0.09
+    assert abs(fine["ram_pressure"] - HILL) < 0.6 * abs(coarse["ram_pressure"] - HILL)
+    assert coarse["die_friction_force_x"] == 0.0
+
+
+def test_friction_raises_the_ram_pressure():
+    frictionless = solved(solver=DIRECT)
+    rough = solved(solver=DIRECT, friction={"mu": 0.1})
+    assert rough["converged"]
+    assert rough["ram_pressure"] > frictionless["ram_pressure"] + 0.2
+    assert rough["die_friction_force_x"] > 0.1 * rough["die_force_x"]
+    assert rough["force_balance_residual"] < 1e-2
+
+
+def test_direct_and_modified_methods_agree():
+    direct = solved(solver=DIRECT, friction={"mu": 0.1})
+    modified = solved(solver={"method": "modified"}, friction={"mu": 0.1})
+    assert modified["converged"] and modified["outer_iterations"] > 1
+    assert modified["ram_pressure"] == pytest.approx(direct["ram_pressure"], rel=5e-3)
+    assert modified["linear_solves"] > direct["linear_solves"]
+
+
+@pytest.mark.parametrize("d", [1e-3, 1e-4, 1e-5])
+def test_ram_face_pressure_follows_the_penalty(d):
+    """p_av on Gamma1 differs from the ram pressure by the deviatoric stress of the ram-side zone,
+    which the penalty compresses at the volumetric rate d*sigma_H (uniaxial strain, u_y ~ 0):
+    below the rate rate1 of (4.5) p_ram = p_av (1 + 4/9 G(rate1) d); above it p_ram = p_av + 2/3 sigma_p."""
+    result = solved(solver=DIRECT, penalty={"d": d})
+    law = make_scene().material
+    p_ram, p_av = result["ram_pressure"], result["mean_hydrostatic_pressure"]
+    rate = 2 / 3 * d * p_av
+    if rate < law.rate1:
+        expected = p_ram / (1 + 4 / 9 * law.secant(np.array([law.rate1]))[0] * d)
+    else:
+        expected = p_ram - 2 / 3 * law.flow_stress(np.array([rate]))[0]
+    assert p_av == pytest.approx(expected, rel=5e-3)
+    assert p_ram == pytest.approx(solved(solver=DIRECT)["ram_pressure"], rel=2e-2)
+
+
+KEYS = ["ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "die_friction_force_x", "force_balance_residual",
+        "divergence_l2"]
+
+
+def test_same_numbers_on_one_and_all_ranks():
+    """Under mpirun -n 2 this compares a 2-rank solve with a 1-rank solve of the same scene."""
+    scene = make_scene(discretisation={"mesh_size": 1.0}, friction={"mu": 0.1})
+    parallel = solve_scene(scene, comm=MPI.COMM_WORLD)[2]
+    serial = solve_scene(scene, comm=MPI.COMM_SELF)[2]
+    assert parallel["mpi_ranks"] == MPI.COMM_WORLD.size and serial["mpi_ranks"] == 1
+    assert parallel["linear_solves"] == serial["linear_solves"]
+    assert parallel["dofs"] == serial["dofs"]
+    for key in KEYS:
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-14), key
