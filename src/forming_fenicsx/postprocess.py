@@ -110,7 +110,7 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     degree = geometry_degree(problem.mesh)
     space = function_space(problem.mesh, "P", degree)
     velocity = problem.u
-    if problem.V.ufl_element().degree() != degree:
+    if problem.scene.discretisation.degree != degree:
         velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
         velocity.interpolate(problem.u)
     sources = {
