@@ -9,10 +9,10 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
+from forming_fenicsx.postprocess import ram_face_pressure_model
 from forming_fenicsx.run import solve_scene
 
 HILL = 1 + math.pi / 2
@@ -69,12 +69,7 @@ scene = load_scene(args.scene)
 law = scene.material
 for d in args.penalties:
     s = run("discretisation.mesh_size=0.25", grading, "solver.method=direct", f"penalty.d={d}")
-    p_ram, p_av = s["ram_pressure"], s["mean_hydrostatic_pressure"]
-    rate = 2 / 3 * d * p_av
-    if rate < law.rate1:
-        model = p_ram / (1 + 4 / 9 * law.secant(np.array([law.rate1]))[0] * d)
-    else:
-        model = p_ram - 2 / 3 * law.flow_stress(np.array([rate]))[0]
+    model = ram_face_pressure_model(law, d, s["ram_pressure"])
     results["penalty"].append({"d": d, "rigid_zone_model": model, **s})
 table("p_av on the ram face against d (h = 0.25)",
       ["d", "ram pressure", "p_av", "rigid-zone model of p_av", "||div u||", "linear solves"],
