@@ -68,3 +68,22 @@ def test_same_numbers_on_one_and_all_ranks():
     assert parallel["dofs"] == serial["dofs"]
     for key in KEYS:
         assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-14), key
+
+
+def test_q1_with_complete_volumetric_integration_locks():
+    """verification.md: Q1 with complete integration of the penalty term locks (pressure far too high)."""
+    reduced = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "reduced"})
+    complete = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "complete"})
+    assert abs(reduced["ram_pressure"] / HILL - 1) < 0.2
+    assert complete["ram_pressure"] > 1.4 * reduced["ram_pressure"]
+
+
+def test_node_and_centre_averaging_approach_each_other_under_refinement():
+    gaps = []
+    for size in (0.5, 0.25):
+        nodes = solved(solver=DIRECT, discretisation={"mesh_size": size})
+        centres = solved(solver=DIRECT, discretisation={"mesh_size": size, "averaging": "centres"})
+        assert centres["converged"] and centres["force_balance_residual"] < 1e-3
+        gaps.append(abs(centres["ram_pressure"] - nodes["ram_pressure"]))
+    assert gaps[1] < 0.6 * gaps[0]
+    assert abs(centres["ram_pressure"] / HILL - 1) < 0.06
