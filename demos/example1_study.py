@@ -21,8 +21,8 @@ parser.add_argument("--scene", default=str(Path(__file__).with_name("example1_ex
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.5, 0.25, 0.125, 0.0625])
 parser.add_argument("--grading", type=float, default=8.0)
 parser.add_argument("--penalties", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6])
-parser.add_argument("--parts", nargs="+", default=["mesh", "penalty", "methods", "elements"],
-                    choices=["mesh", "penalty", "methods", "elements"])
+PARTS = ["mesh", "penalty", "methods", "tolerance", "elements"]
+parser.add_argument("--parts", nargs="+", default=PARTS, choices=PARTS)
 parser.add_argument("--out", default="results/example1_study")
 args = parser.parse_args()
 rank0 = MPI.COMM_WORLD.rank == 0
@@ -48,7 +48,7 @@ def richardson(values: list[float]) -> tuple[float, float]:
     return c - (b - c) / (2**order - 1), order
 
 
-results: dict = {"mesh": [], "penalty": [], "methods": [], "elements": []}
+results: dict = {part: [] for part in PARTS}
 grading = f"discretisation.corner_grading={args.grading}"
 
 # ## 1. Ram pressure under mesh refinement (mu = 0, direct method)
@@ -89,7 +89,19 @@ table("Secant-modulus methods, delta = 1e-4, demo scene mesh",
       [[r["mu"], r["method"], r["linear_solves"], r["outer_iterations"], round(r["wall_time_s"], 1),
         r["ram_pressure"], f"{r['force_balance_residual']:.1e}"] for r in results["methods"]])
 
-# ## 4. Elements and volumetric quadrature (mu = 0, h = 0.25, direct method)
+# ## 4. The stopping tolerance delta and the force balance (mu = 0.1, h = 0.25)
+for tolerance in (1e-4, 1e-5, 1e-6) if "tolerance" in args.parts else []:
+    for method in ("direct", "modified"):
+        s = run("discretisation.mesh_size=0.25", grading, "friction.mu=0.1", f"solver.method={method}",
+                f"solver.tolerance={tolerance}", "solver.max_iterations=5000")
+        results["tolerance"].append({"tolerance": tolerance, "method": method, **s})
+table("Stopping tolerance against force balance (mu = 0.1, h = 0.25)",
+      ["delta", "method", "linear solves", "outer iterations", "ram pressure", "die friction force x",
+       "force balance"],
+      [[r["tolerance"], r["method"], r["linear_solves"], r["outer_iterations"], r["ram_pressure"],
+        r["die_friction_force_x"], f"{r['force_balance_residual']:.1e}"] for r in results["tolerance"]])
+
+# ## 5. Elements and volumetric quadrature (mu = 0, h = 0.25, direct method)
 variants = [("Q2", "reduced", "nodes"), ("Q2", "reduced", "centres"), ("Q2", "complete", "nodes"),
             ("Q1", "reduced", "nodes"), ("Q1", "complete", "nodes")]
 for element, quadrature, averaging in variants if "elements" in args.parts else []:
