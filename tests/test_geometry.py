@@ -24,20 +24,47 @@ def test_extrusion_roles_and_measures(element):
     fm = build_mesh(scene)
     mesh = fm.mesh
     assert mesh.geometry.cmap.degree == int(element[1])
-    assert set(fm.roles) == {"gamma1_velocity", "gamma2_free", "gamma3_contact", "gamma4_free", "gamma6_symmetry"}
+    assert set(fm.roles) == {"gamma1_velocity", "gamma3_contact", "gamma4_free", "gamma6_symmetry"}
     one = dolfinx.fem.Constant(mesh, 1.0)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=fm.facet_tags)
     assert integrate(mesh, one * ufl.dx) == pytest.approx(6 * 4 + 10 * 1.5, rel=1e-12)
-    lengths = {"gamma1_velocity": 4.0, "gamma2_free": 10.0, "gamma3_contact": 6.0 + 2.5,
-               "gamma4_free": 1.5, "gamma6_symmetry": 16.0}
+    lengths = {"gamma1_velocity": 4.0, "gamma3_contact": 6.0 + 2.5, "gamma4_free": 10.0 + 1.5,
+               "gamma6_symmetry": 16.0}
     for role, length in lengths.items():
         assert integrate(mesh, one * ds(ROLES[role])) == pytest.approx(length, rel=1e-12)
     assert integrate(mesh, one * ufl.ds) == pytest.approx(sum(lengths.values()), rel=1e-12)  # every facet has a role
 
 
-def test_applied_force_makes_gamma5():
-    fm = build_mesh(make_scene(process={"applied_force": 0.5}, discretisation={"mesh_size": 1.0}))
-    assert "gamma5_force" in fm.roles and "gamma4_free" not in fm.roles
+def role_lengths(fm) -> dict[str, float]:
+    ds = ufl.Measure("ds", domain=fm.mesh, subdomain_data=fm.facet_tags)
+    one = dolfinx.fem.Constant(fm.mesh, 1.0)
+    return {role: integrate(fm.mesh, one * ds(tag)) for role, tag in fm.roles.items()}
+
+
+def test_applied_force_makes_the_exit_face_gamma5():
+    lengths = role_lengths(build_mesh(make_scene(process={"applied_force": 0.5}, discretisation={"mesh_size": 1.0})))
+    assert lengths["gamma5_force"] == pytest.approx(2.5, rel=1e-12)
+    assert lengths["gamma4_free"] == pytest.approx(10.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("land", [0.0, 0.15])
+@pytest.mark.parametrize("drive", ["pull", "push"])
+def test_drawing_roles_and_measures(land, drive):
+    scene = make_scene(process={"kind": "drawing", "drive": drive, "applied_force": 10.0},
+                       geometry={"land_length": land}, discretisation={"mesh_size": 0.1})
+    fm = build_mesh(scene)
+    g = scene.geometry
+    h0, h1 = g.entry_thickness / 2, g.exit_thickness / 2
+    slant = (h0 - h1) / np.sin(np.radians(g.die_angle))
+    lengths = role_lengths(fm)
+    assert lengths["gamma3_contact"] == pytest.approx(slant + land, rel=1e-12)
+    assert lengths["gamma1_velocity"] == pytest.approx(h1 if drive == "pull" else h0, rel=1e-12)
+    assert lengths["gamma5_force"] == pytest.approx(h0 if drive == "pull" else h1, rel=1e-12)
+    assert lengths["gamma2_free"] == pytest.approx(g.die_entry, rel=1e-12)
+    assert lengths["gamma4_free"] == pytest.approx(g.length - g.die_exit, rel=1e-12)
+    area = integrate(fm.mesh, dolfinx.fem.Constant(fm.mesh, 1.0) * ufl.dx)
+    assert area == pytest.approx(g.die_entry * h0 + g.cone_length * (h0 + h1) / 2 + (g.length - g.die_entry
+                                                                                    - g.cone_length) * h1, rel=1e-12)
 
 
 def test_graded_edge_ratio():

@@ -109,14 +109,73 @@ def _extrusion(scene: Scene) -> None:
     blocks = [["bottom_container", "inner_vertical", "-inner_horizontal", "-ram_lower"],
               ["inner_horizontal", "die_face", "-container_wall", "-ram_upper"],
               ["bottom_exit", "exit_face", "-exit_surface", "-inner_vertical"]]
-    end_role = "gamma5_force" if scene.process.applied_force is not None else "gamma4_free"
-    groups = {"gamma1_velocity": ["ram_lower", "ram_upper"], "gamma2_free": ["exit_surface"],
-              "gamma3_contact": ["die_face", "container_wall"], end_role: ["exit_face"],
-              "gamma6_symmetry": ["bottom_container", "bottom_exit"]}
+    groups = _end_faces(scene, ["ram_lower", "ram_upper"], ["exit_face"])
+    groups.setdefault("gamma4_free", []).append("exit_surface")
+    groups["gamma3_contact"] = ["die_face", "container_wall"]
+    groups["gamma6_symmetry"] = ["bottom_container", "bottom_exit"]
     _add_blocks(points, edges, blocks, groups)
 
 
-BUILDERS = {"extrusion": _extrusion}
+def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
+    """Gamma1 on the driven end face (entry for "push", exit for "pull"); the other end carries F_N
+    (Gamma5) when the scene gives one, else it is free (Gamma2 upstream, Gamma4 downstream)."""
+    driven, other, free = (entry, exit, "gamma4_free") if scene.process.drive == "push" else (exit, entry, "gamma2_free")
+    loaded = "gamma5_force" if scene.process.applied_force is not None else free
+    return {"gamma1_velocity": list(driven), loaded: list(other)}
+
+
+def _drawing(scene: Scene) -> None:
+    """Example 2 half model: a strip through a conical die of semi-angle alpha with a land.
+
+    Blocks along x: entry [0, xa], cone [xa, xb], land [xb, xc] (omitted without a land), exit [xc, L],
+    with the same number of elements through the thickness; grading refines toward the die entry
+    corner (xa, h0) and the die exit (xc, h1).
+    """
+    g, disc = scene.geometry, scene.discretisation
+    h0, h1, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.length
+    xa, xb, xc = g.die_entry, g.die_entry + g.cone_length, g.die_exit
+    size, grade = disc.mesh_size, disc.corner_grading
+    n_y = max(1, math.ceil(h0 / size - 1e-9))
+    n_in, r_in = graded_edge(xa, size, grade, toward_end=True)
+    n_cone, _ = graded_edge(xb - xa, size, 1.0, toward_end=True)
+    n_out, r_out = graded_edge(L - xc, size, grade, toward_end=False)
+    has_land = xc > xb
+    bottom_end, top_end = ("bc", "tc") if has_land else ("bb", "tb")
+    points = {"b0": (0, 0), "ba": (xa, 0), "bb": (xb, 0), "bc": (xc, 0), "bL": (L, 0),
+              "t0": (0, h0), "ta": (xa, h0), "tb": (xb, h1), "tc": (xc, h1), "tL": (L, h1)}
+    if not has_land:
+        del points["bc"], points["tc"]
+    edges = {
+        "bottom_entry": Edge("b0", "ba", n_in, r_in), "bottom_cone": Edge("ba", "bb", n_cone),
+        "bottom_exit": Edge(bottom_end, "bL", n_out, r_out),
+        "entry_face": Edge("b0", "t0", n_y), "die_entry_line": Edge("ba", "ta", n_y),
+        "cone_end_line": Edge("bb", "tb", n_y), "exit_face": Edge("bL", "tL", n_y),
+        "entry_surface": Edge("t0", "ta", n_in, r_in), "cone_face": Edge("ta", "tb", n_cone),
+        "exit_surface": Edge(top_end, "tL", n_out, r_out),
+    }
+    blocks = [["bottom_entry", "die_entry_line", "-entry_surface", "-entry_face"],
+              ["bottom_cone", "cone_end_line", "-cone_face", "-die_entry_line"]]
+    contact, bottom = ["cone_face"], ["bottom_entry", "bottom_cone", "bottom_exit"]
+    if has_land:
+        n_land, _ = graded_edge(xc - xb, size, 1.0, toward_end=True)
+        edges.update({"bottom_land": Edge("bb", "bc", n_land), "land_end_line": Edge("bc", "tc", n_y),
+                      "land_face": Edge("tb", "tc", n_land)})
+        blocks.append(["bottom_land", "land_end_line", "-land_face", "-cone_end_line"])
+        contact.append("land_face")
+        bottom.append("bottom_land")
+        last_line = "land_end_line"
+    else:
+        last_line = "cone_end_line"
+    blocks.append(["bottom_exit", "exit_face", "-exit_surface", f"-{last_line}"])
+    groups = _end_faces(scene, ["entry_face"], ["exit_face"])
+    groups.setdefault("gamma2_free", []).append("entry_surface")
+    groups.setdefault("gamma4_free", []).append("exit_surface")
+    groups["gamma3_contact"] = contact
+    groups["gamma6_symmetry"] = bottom
+    _add_blocks(points, edges, blocks, groups)
+
+
+BUILDERS = {"extrusion": _extrusion, "drawing": _drawing}
 
 
 @contextmanager

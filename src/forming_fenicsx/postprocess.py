@@ -82,7 +82,7 @@ def mean_hydrostatic_pressure(problem: FlowProblem) -> float:
 
 def scalars(problem: FlowProblem) -> dict[str, float]:
     """The summary numbers of a run (ram pressure, p_av, die force and the x force balance)."""
-    height = problem.scene.geometry.inlet_height
+    height = _integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
     ram = reaction(problem)
     die_normal, die_friction = die_forces_x(problem)
     die = die_normal + die_friction

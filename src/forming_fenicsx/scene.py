@@ -18,16 +18,21 @@ from typing import Any
 from .errors import SceneError
 from .material import LAWS, FlowLaw, PiecewisePowerLaw
 
-PROCESSES = ("extrusion",)
+PROCESSES = ("extrusion", "drawing")
 
 
 @dataclass
 class Process:
-    """What is formed and how: the process velocity u_N^0 on Gamma1 (2.5) and the force F_N on Gamma5 (2.7)."""
+    """What is formed and how: the process velocity u_N^0 on Gamma1 (2.5) and the force F_N on Gamma5 (2.7).
+
+    ``drive`` says where the velocity is prescribed: "pull" at the exit face (drawing), "push" at the
+    entry face (extrusion's ram). F_N acts on the other end face, which is free without it.
+    """
 
     kind: str = "extrusion"
     velocity: float = 1.0
     applied_force: float | None = None
+    drive: str = "push"
 
     def check(self) -> None:
         if self.kind not in PROCESSES:
@@ -36,6 +41,8 @@ class Process:
             raise SceneError("process.velocity", f"must be a finite number > 0; got {self.velocity}")
         if self.applied_force is not None and not math.isfinite(self.applied_force):
             raise SceneError("process.applied_force", f"must be a finite number; got {self.applied_force}")
+        if self.drive not in ("push", "pull"):
+            raise SceneError("process.drive", f"must be one of push, pull; got {self.drive!r}")
 
 
 @dataclass
@@ -65,24 +72,83 @@ class ExtrusionGeometry:
         """Half-thickness of the thinnest section (the half model's exit)."""
         return 0.5 * self.exit_thickness
 
+
+@dataclass
+class DrawingGeometry:
+    """Plane-strain strip drawing through a conical die with a land (Example 2); full thicknesses.
+
+    The strip meets the die at x = die_entry; the die face falls at the semi-angle die_angle (degrees)
+    to the exit half-thickness, then runs parallel for land_length.
+    """
+
+    length: float = 7.8
+    entry_thickness: float = 1.625
+    exit_thickness: float = 1.5
+    die_angle: float = 6.0
+    land_length: float = 0.15
+    die_entry: float = 3.0
+
+    def check(self) -> None:
+        for key in ("length", "entry_thickness", "exit_thickness", "die_entry"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value > 0):
+                raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
+        if self.exit_thickness >= self.entry_thickness:
+            raise SceneError("geometry.exit_thickness",
+                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
+                             f"the die must reduce; got {self.exit_thickness}")
+        if not (math.isfinite(self.die_angle) and 0 < self.die_angle < 90):
+            raise SceneError("geometry.die_angle", f"must lie in (0, 90) degrees (the semi-angle); got {self.die_angle}")
+        if not (math.isfinite(self.land_length) and self.land_length >= 0):
+            raise SceneError("geometry.land_length", f"must be a finite number >= 0; got {self.land_length}")
+        if self.die_exit >= self.length:
+            raise SceneError("geometry.land_length",
+                             f"the die (entry at {self.die_entry}, cone {self.cone_length:.4g} long, land "
+                             f"{self.land_length}) must end before geometry.length ({self.length})")
+
     @property
-    def inlet_height(self) -> float:
-        """Height of Gamma1 in the half model."""
-        return 0.5 * self.entry_thickness
+    def cone_length(self) -> float:
+        """Axial length of the conical die face."""
+        return 0.5 * (self.entry_thickness - self.exit_thickness) / math.tan(math.radians(self.die_angle))
+
+    @property
+    def die_exit(self) -> float:
+        """x at the end of the land."""
+        return self.die_entry + self.cone_length + self.land_length
+
+    @property
+    def thinnest(self) -> float:
+        """Half-thickness of the thinnest section (the half model's exit)."""
+        return 0.5 * self.exit_thickness
+
+
+NORMAL_STRESSES = ("averaged", "local")
 
 
 @dataclass
 class Friction:
-    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11)."""
+    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11).
+
+    The bound tau_f = mu * sigma_N-bar uses the averaged (mollified) normal stress over
+    ``mollification_length`` (default: the mesh size), or the local penalty stress of (3.4).
+    """
 
     mu: float = 0.0
     d_T: float = 1e-6
+    normal_stress: str = "averaged"
+    mollification_length: float | None = None
 
     def check(self) -> None:
         if not (math.isfinite(self.mu) and self.mu >= 0):
             raise SceneError("friction.mu", f"must be a finite number >= 0; got {self.mu}")
         if not (math.isfinite(self.d_T) and self.d_T > 0):
             raise SceneError("friction.d_T", f"must be a finite number > 0; got {self.d_T}")
+        if self.normal_stress not in NORMAL_STRESSES:
+            raise SceneError("friction.normal_stress",
+                             f"must be one of {', '.join(NORMAL_STRESSES)}; got {self.normal_stress!r}")
+        length = self.mollification_length
+        if length is not None and not (math.isfinite(length) and length > 0):
+            raise SceneError("friction.mollification_length", f"must be a finite number > 0; got {length}")
 
 
 @dataclass
@@ -168,7 +234,19 @@ class Output:
         """Nothing to check beyond types."""
 
 
-GEOMETRIES = {"extrusion": ExtrusionGeometry}
+GEOMETRIES = {"extrusion": ExtrusionGeometry, "drawing": DrawingGeometry}
+
+# The paper's constants for each process (Example 1 and Example 2), over the dataclass defaults.
+PROCESS_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
+    "extrusion": {},
+    "drawing": {
+        "process": {"velocity": 1000.0, "drive": "pull"},
+        "material": {"A": 100 * math.sqrt(3.0)},
+        "penalty": {"d": 0.005, "d_N": 0.01},
+        "discretisation": {"element": "Q1", "volumetric_integration": "complete", "mesh_size": 0.05,
+                           "corner_grading": 1.0},
+    },
+}
 
 
 @dataclass
@@ -176,7 +254,7 @@ class Scene:
     """One run, fully specified."""
 
     process: Process
-    geometry: ExtrusionGeometry
+    geometry: ExtrusionGeometry | DrawingGeometry
     material: FlowLaw
     friction: Friction
     penalty: Penalty
@@ -192,6 +270,12 @@ class Scene:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
                              f"at least one element spans it; got {self.discretisation.mesh_size}")
+
+    @property
+    def mollification_length(self) -> float:
+        """Length of the normal-stress averaging: the scene's, else about one element."""
+        given = self.friction.mollification_length
+        return given if given is not None else self.discretisation.mesh_size
 
     @property
     def reference_strain_rate(self) -> float:
@@ -250,11 +334,12 @@ def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, A
     return cls(**values)
 
 
-def _material(table: dict[str, Any]) -> FlowLaw:
+def _material(table: dict[str, Any], defaults: dict[str, Any]) -> FlowLaw:
     law = table.get("law", PiecewisePowerLaw.law)
     if law not in LAWS:
         raise SceneError("material.law", f"must be one of {', '.join(LAWS)}; got {law!r}")
-    return _build(LAWS[law], table, "material")
+    names = {f.name for f in dataclasses.fields(LAWS[law])}
+    return _build(LAWS[law], table, "material", {k: v for k, v in defaults.items() if k in names})
 
 
 SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output")
@@ -271,18 +356,16 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     tables = {name: data.get(name, {}) for name in SECTIONS}
     if "kind" not in tables["process"]:
         raise SceneError("process.kind", f"missing; must be one of {', '.join(PROCESSES)}")
-    process = _build(Process, tables["process"], "process")
+    kind = tables["process"]["kind"]
+    if kind not in PROCESSES:
+        raise SceneError("process.kind", f"must be one of {', '.join(PROCESSES)}; got {kind!r}")
+    defaults = PROCESS_DEFAULTS[kind]
+    process = _build(Process, tables["process"], "process", defaults.get("process"))
     process.check()
-    scene = Scene(
-        process=process,
-        geometry=_build(GEOMETRIES[process.kind], tables["geometry"], "geometry"),
-        material=_material(tables["material"]),
-        friction=_build(Friction, tables["friction"], "friction"),
-        penalty=_build(Penalty, tables["penalty"], "penalty"),
-        discretisation=_build(Discretisation, tables["discretisation"], "discretisation"),
-        solver=_build(Solver, tables["solver"], "solver"),
-        output=_build(Output, tables["output"], "output"),
-    )
+    classes = {"geometry": GEOMETRIES[kind], "friction": Friction, "penalty": Penalty,
+               "discretisation": Discretisation, "solver": Solver, "output": Output}
+    built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
+    scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {})), **built)
     scene.check()
     return scene
 
