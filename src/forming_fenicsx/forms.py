@@ -67,6 +67,12 @@ class FlowProblem:
         self.has_contact = "gamma3_contact" in self.roles
         self.has_friction = self.has_contact and scene.friction.mu > 0
         self.has_force = "gamma5_force" in self.roles and scene.process.applied_force is not None
+        self.normal_stress_average = None
+        if self.has_friction and scene.friction.normal_stress == "averaged":
+            pressure = contact.contact_pressure(self.u_friction, self.n, scene.penalty.d_N)
+            self.normal_stress_average = friction.AveragedNormalStress(
+                pressure, mesh, self.facet_tags, ROLES["gamma3_contact"], scene.mollification_length,
+                scene.solver.petsc_options)
         self.bcs = self._boundary_conditions()
 
         du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
@@ -96,10 +102,15 @@ class FlowProblem:
     def ds_contact(self):
         return self.ds(ROLES["gamma3_contact"])
 
+    def normal_pressure(self):
+        """The sigma_N-bar >= 0 of tau_f: averaged (mollified) or local (3.4), from ``u_friction``."""
+        if self.normal_stress_average is not None:
+            return ufl.max_value(self.normal_stress_average.value, 0.0)
+        return contact.contact_pressure(self.u_friction, self.n, self.scene.penalty.d_N)
+
     def friction_coefficient(self):
-        """Slip coefficient tau_f(u_friction)/sqrt(|u_state,T|^2 + d_T^2); tau_f from the local (3.4) stress."""
-        pressure = contact.contact_pressure(self.u_friction, self.n, self.scene.penalty.d_N)
-        tau_f = friction.friction_bound(self.scene.friction.mu, pressure)
+        """Slip coefficient tau_f(u_friction)/sqrt(|u_state,T|^2 + d_T^2) of the regularised friction."""
+        tau_f = friction.friction_bound(self.scene.friction.mu, self.normal_pressure())
         return friction.slip_coefficient(tau_f, self.u_state, self.n, self.scene.friction.d_T)
 
     def _bilinear(self, u, v):
@@ -146,6 +157,8 @@ class FlowProblem:
             self.freeze_friction(u)
 
     def freeze_friction(self, u: dolfinx.fem.Function) -> None:
-        """tau_f from u: u_{0,m} of the modified method (3.33)."""
+        """tau_f from u: u_{0,m} of the modified method (3.33), u_n of the direct method (3.13)."""
         petsc_vec(u).copy(petsc_vec(self.u_friction))
         self.u_friction.x.scatter_forward()
+        if self.normal_stress_average is not None:
+            self.normal_stress_average.update()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import numpy as np
 import ufl
 from petsc4py import PETSc
 
@@ -18,16 +19,21 @@ from .compat import petsc_vec
 class LumpedProjector:
     """Projects one UFL expression onto the space of ``target``; forms are compiled once."""
 
-    def __init__(self, expr: ufl.core.expr.Expr, target: dolfinx.fem.Function, quadrature_degree: int):
+    def __init__(self, expr: ufl.core.expr.Expr, target: dolfinx.fem.Function, quadrature_degree: int,
+                 measure: ufl.Measure | None = None):
+        """``measure`` defaults to dx; a boundary measure (ds(tag)) projects onto the traces there and
+        leaves every other value zero."""
         space = target.function_space
         v = ufl.TestFunction(space)
-        dx = ufl.dx(domain=space.mesh, metadata={"quadrature_degree": quadrature_degree})
+        if measure is None:
+            measure = ufl.dx(domain=space.mesh, metadata={"quadrature_degree": quadrature_degree})
         ones = ufl.as_vector([1.0] * space.num_sub_spaces) if space.num_sub_spaces else 1.0
         self.target = target
-        self._form = dolfinx.fem.form(ufl.inner(expr, v) * dx)
-        self._weights = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.inner(ones, v) * dx))
+        self._form = dolfinx.fem.form(ufl.inner(expr, v) * measure)
+        self._weights = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.inner(ones, v) * measure))
         self._weights.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self._weights.reciprocal()
+        weights = self._weights.getArray()
+        weights[:] = np.divide(1.0, weights, out=np.zeros_like(weights), where=weights != 0)
         self._rhs = self._weights.duplicate()
 
     def project(self) -> dolfinx.fem.Function:
