@@ -13,10 +13,15 @@ def problem_for(**sections) -> FlowProblem:
 
 
 def test_no_friction_term_at_zero_friction():
-    frictionless, rough = problem_for(), problem_for(friction={"mu": 0.1})
+    frictionless = problem_for()
+    averaged = problem_for(friction={"mu": 0.1})
+    local = problem_for(friction={"mu": 0.1, "normal_stress": "local"})
+    assert frictionless.normal_stress_average is None and local.normal_stress_average is None
     assert frictionless.u_friction not in frictionless.a_ufl.coefficients()
-    assert rough.u_friction in rough.a_ufl.coefficients()
-    assert len(rough.a_ufl.integrals()) == len(frictionless.a_ufl.integrals()) + 1
+    assert averaged.normal_stress_average.value in averaged.a_ufl.coefficients()
+    assert local.u_friction in local.a_ufl.coefficients()
+    for rough in (averaged, local):
+        assert len(rough.a_ufl.integrals()) == len(frictionless.a_ufl.integrals()) + 1
 
 
 def test_force_term_only_with_gamma5():
