@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import gmsh
+import numpy as np
 from mpi4py import MPI
 
 from .scene import Scene
@@ -220,3 +221,20 @@ def write_msh(scene: Scene, path: str | Path) -> Path:
         _generate(scene)
         gmsh.write(str(path))
     return path
+
+
+def die_coordinate(scene: Scene, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Arc length along Gamma3 from where the workpiece meets the die, for points on Gamma3.
+
+    Extrusion: along the container wall (from the ram), then down the die face. Drawing: along the
+    cone from the die entry, then along the land.
+    """
+    g = scene.geometry
+    if scene.process.kind == "extrusion":
+        h0 = 0.5 * g.entry_thickness
+        on_face = np.isclose(x, g.die_position) & (y < h0 - 1e-12 * h0)
+        return np.where(on_face, g.die_position + (h0 - y), x)
+    cone_end = g.die_entry + g.cone_length
+    slant = g.cone_length / math.cos(math.radians(g.die_angle))
+    return np.where(x <= cone_end, (x - g.die_entry) / math.cos(math.radians(g.die_angle)),
+                    slant + (x - cone_end))

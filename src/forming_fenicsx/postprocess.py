@@ -6,6 +6,8 @@ penalty pressure sigma_H = div(u)/d of (3.4).
 """
 from __future__ import annotations
 
+import math
+
 import dolfinx.fem
 import dolfinx.fem.petsc
 import numpy as np
@@ -15,7 +17,7 @@ from petsc4py import PETSc
 from . import contact, friction
 from .compat import function_space, geometry_degree
 from .forms import FlowProblem
-from .geometry import ROLES
+from .geometry import ROLES, die_coordinate
 from .kinematics import equivalent_strain_rate
 from .projection import LumpedProjector
 
@@ -80,24 +82,100 @@ def mean_hydrostatic_pressure(problem: FlowProblem) -> float:
     return _integrate(problem, pressure * ds) / _integrate(problem, 1.0 * ds)
 
 
-def scalars(problem: FlowProblem) -> dict[str, float]:
-    """The summary numbers of a run (ram pressure, p_av, die force and the x force balance)."""
-    height = _integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
-    ram = reaction(problem)
+def in_contact(problem: FlowProblem):
+    """1 where the workpiece presses on the die (u_N > 0, sigma_N < 0 in (3.4)), else 0."""
+    return ufl.conditional(ufl.gt(contact.normal_velocity(problem.u, problem.n), 0.0), 1.0, 0.0)
+
+
+def die_pressure(problem: FlowProblem):
+    """Contact pressure -sigma_N on Gamma3: the penalty's u_N^+/d_N (3.4), or -n.sigma.n of the stress."""
+    if problem.scene.output.die_pressure == "stress":
+        n = problem.n
+        return -ufl.dot(n, ufl.dot(problem.stress(), n))
+    return contact.contact_pressure(problem.u, problem.n, problem.scene.penalty.d_N)
+
+
+def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
+    """Nodal values along Gamma3 on rank 0 (None elsewhere), ordered by the die coordinate s:
+    contact pressure, averaged normal stress (when friction uses it) and friction stress |sigma_T|."""
+    space = function_space(problem.mesh, "P", 1)
+    ds = problem.ds_contact
+    sources = {"contact_pressure": die_pressure(problem)}
+    if problem.normal_stress_average is not None:
+        sources["averaged_normal_stress"] = problem.normal_stress_average.value
+    if problem.has_friction:
+        slip = friction.tangential(problem.u, problem.n)
+        sources["friction_stress"] = problem.friction_coefficient() * ufl.sqrt(ufl.dot(slip, slip))
+    owned = space.dofmap.index_map.size_local
+    dofs = dolfinx.fem.locate_dofs_topological(space, problem.mesh.topology.dim - 1,
+                                               problem.role_facets("gamma3_contact"))
+    dofs = dofs[dofs < owned]
+    points = space.tabulate_dof_coordinates()[dofs]
+    columns = {"x": points[:, 0], "y": points[:, 1]}
+    for name, expr in sources.items():
+        target = dolfinx.fem.Function(space)
+        columns[name] = LumpedProjector(expr, target, problem.full_degree, ds).project().x.array[dofs]
+    gathered = problem.comm.gather(columns, root=0)
+    if problem.comm.rank != 0:
+        return None
+    profile = {key: np.concatenate([part[key] for part in gathered]) for key in columns}
+    profile["s"] = die_coordinate(problem.scene, profile["x"], profile["y"])
+    order = np.argsort(profile["s"])
+    return {key: profile[key][order] for key in ["s", *columns]}
+
+
+def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
+    """q_av over the contact part of the die cone (the paper's mean die pressure), contact length and
+    the x where the strip leaves the die (last node of Gamma3 with positive contact pressure)."""
+    g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
+    start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
+    cone = ufl.conditional(ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    touching = in_contact(problem)
+    ds = problem.ds_contact
+    cone_contact = _integrate(problem, touching * cone * ds)
+    q_av = _integrate(problem, die_pressure(problem) * touching * cone * ds) / cone_contact if cone_contact else 0.0
+    profile = die_profile(problem)
+    end = None
+    if profile is not None:
+        pressed = profile["contact_pressure"] > 1e-9 * max(profile["contact_pressure"].max(), 1e-300)
+        end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
+    return {"mean_die_pressure": q_av, "contact_length": _integrate(problem, touching * ds),
+            "contact_end_x": problem.comm.bcast(end, root=0)}
+
+
+def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
+    """(relative residual, Gamma1 force, die normal x-force, die friction x-force, applied x-force) of the
+    x force balance Gamma1 force + applied force = die force (verification.md), at the current state."""
+    force = reaction(problem)
     die_normal, die_friction = die_forces_x(problem)
-    die = die_normal + die_friction
     external = applied_force_x(problem)
-    div_u = np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol))
+    die = die_normal + die_friction
+    return (abs(force + external - die) / max(abs(force), abs(die), 1e-300), force, die_normal, die_friction,
+            external)
+
+
+def scalars(problem: FlowProblem) -> dict[str, float]:
+    """The summary numbers of a run: process force and pressure, die forces and the x force balance.
+
+    Extrusion: ram force and pressure (force over the Gamma1 height), p_av. Drawing: drawing force
+    and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end.
+    """
+    residual, force, die_normal, die_friction, external = force_balance(problem)
+    if problem.scene.process.kind == "extrusion":
+        height = _integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
+        process = {"ram_force": force, "ram_pressure": force / height,
+                   "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
+    else:
+        process = {"drawing_force": force, "drawing_stress": force / problem.scene.geometry.thinnest,
+                   **drawing_scalars(problem)}
     return {
-        "ram_force": ram,
-        "ram_pressure": ram / height,
-        "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem),
-        "die_force_x": die,
+        **process,
+        "die_force_x": die_normal + die_friction,
         "die_normal_force_x": die_normal,
         "die_friction_force_x": die_friction,
         "applied_force_x": external,
-        "force_balance_residual": abs(ram + external - die) / max(abs(ram), abs(die), 1e-300),
-        "divergence_l2": div_u,
+        "force_balance_residual": residual,
+        "divergence_l2": np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)),
     }
 
 

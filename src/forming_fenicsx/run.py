@@ -13,7 +13,7 @@ from .forms import FlowProblem
 from .geometry import build_mesh
 from .output import write_fields, write_history, write_summary
 from .plotting import write_figures
-from .postprocess import output_fields, scalars
+from .postprocess import force_balance, output_fields, scalars
 from .scene import Scene
 from .solvers import SecantSolver, SolveResult
 
@@ -25,7 +25,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary."""
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
-    solver = SecantSolver(problem, petsc_options)
+    solver = SecantSolver(problem, petsc_options, balance=lambda: force_balance(problem)[0])
     result = solver.solve()
     solver.linear.destroy()
     problem.update_state(problem.u, friction_too=True)
@@ -59,7 +59,7 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
     if comm.rank == 0:
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
-        log.info("ram pressure %.4f, p_av %.4f, force balance residual %.2e, %d linear solves, %.1f s",
-                 summary["ram_pressure"], summary["mean_hydrostatic_pressure"],
-                 summary["force_balance_residual"], summary["linear_solves"], summary["wall_time_s"])
+        key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
+        log.info("%s %.5g, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
+                 summary[key], summary["force_balance_residual"], summary["linear_solves"], summary["wall_time_s"])
     return summary

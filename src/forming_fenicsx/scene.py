@@ -196,13 +196,18 @@ class Discretisation:
 
 @dataclass
 class Solver:
-    """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4)."""
+    """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4).
+
+    ``force_tolerance`` (off by default, as in the paper) also requires the x force balance residual
+    to fall below it before the run counts as converged: a small increment is not a small error.
+    """
 
     method: str = "modified"
     tolerance: float = 1e-4
     max_iterations: int = 200
     max_outer_iterations: int = 50
     reference_strain_rate: float | None = None
+    force_tolerance: float | None = None
     petsc_options: dict[str, Any] = field(default_factory=lambda: {
         "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"})
 
@@ -214,6 +219,9 @@ class Solver:
         for key in ("max_iterations", "max_outer_iterations"):
             if getattr(self, key) < 1:
                 raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
+        force = self.force_tolerance
+        if force is not None and not (math.isfinite(force) and 0 < force < 1):
+            raise SceneError("solver.force_tolerance", f"must lie in (0, 1); got {force}")
         rate = self.reference_strain_rate
         if rate is not None and not (math.isfinite(rate) and rate > 0):
             raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")
@@ -223,15 +231,28 @@ class Solver:
                                  f"must be a string, number or boolean; got {type(value).__name__}")
 
 
+DIE_PRESSURES = ("penalty", "stress")
+
+
 @dataclass
 class Output:
-    """What a run writes besides summary.json and history.csv."""
+    """What a run writes besides summary.json and history.csv, and how the die pressure is measured.
+
+    ``die_pressure``: the contact pressure from the penalty (3.4) u_N^+/d_N, or from the stress
+    -n.sigma.n; ``die_entry_trim``: length of die face after the die entry left out of q_av.
+    """
 
     fields: bool = True
     figures: bool = True
+    die_pressure: str = "penalty"
+    die_entry_trim: float = 0.0
 
     def check(self) -> None:
-        """Nothing to check beyond types."""
+        if self.die_pressure not in DIE_PRESSURES:
+            raise SceneError("output.die_pressure",
+                             f"must be one of {', '.join(DIE_PRESSURES)}; got {self.die_pressure!r}")
+        if not (math.isfinite(self.die_entry_trim) and self.die_entry_trim >= 0):
+            raise SceneError("output.die_entry_trim", f"must be a finite number >= 0; got {self.die_entry_trim}")
 
 
 GEOMETRIES = {"extrusion": ExtrusionGeometry, "drawing": DrawingGeometry}

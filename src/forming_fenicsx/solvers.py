@@ -10,7 +10,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -83,13 +83,18 @@ class SolveResult:
     linear_solves: int = 0
     outer_iterations: int = 0
     history: list[IterationRecord] = field(default_factory=list)
+    force_balance_checks: list[float] = field(default_factory=list)
 
 
 class SecantSolver:
     """The direct (3.13) or modified (3.33) secant-modulus method for a FlowProblem."""
 
-    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None):
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None,
+                 balance: Callable[[], float] | None = None):
+        """``balance`` returns the force balance residual at the current state; with
+        solver.force_tolerance set, convergence also needs it below that tolerance."""
         self.problem = problem
+        self.balance = balance
         settings = problem.scene.solver
         self.settings = settings
         self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
@@ -109,6 +114,18 @@ class SecantSolver:
         if self.problem.comm.rank == 0:
             log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment, record.elapsed)
         return increment
+
+    def _balanced(self, result: SolveResult) -> bool:
+        """The optional force-balance criterion, evaluated with every coefficient at the iterate."""
+        tolerance = self.settings.force_tolerance
+        if tolerance is None or self.balance is None:
+            return True
+        self.problem.update_state(self.problem.u, friction_too=True)
+        residual = self.balance()
+        result.force_balance_checks.append(residual)
+        if self.problem.comm.rank == 0:
+            log.info("force balance residual %.3e (tolerance %.1e)", residual, tolerance)
+        return residual < tolerance
 
     def solve(self) -> SolveResult:
         """Iterate from a uniform modulus until the stopping rule of (4.4) holds."""
@@ -130,7 +147,7 @@ class SecantSolver:
                 if not math.isfinite(increment):
                     result.reason = f"non-finite increment at outer {outer}, inner {inner}"
                     return result
-                if increment < delta:
+                if increment < delta and (method == "modified" and problem.has_friction or self._balanced(result)):
                     break
             else:
                 result.reason = (f"no convergence in {settings.max_iterations} iterations "
@@ -143,7 +160,7 @@ class SecantSolver:
             outer_increment = change.norm() / petsc_vec(problem.u).norm()
             if problem.comm.rank == 0:
                 log.info("outer %d done: ||u0,m+1 - u0,m||/||u0,m+1|| = %.3e", outer, outer_increment)
-            if outer_increment < delta:
+            if outer_increment < delta and self._balanced(result):
                 break
         else:
             result.reason = (f"no convergence of the friction (outer) loop in {settings.max_outer_iterations} "
