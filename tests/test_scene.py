@@ -61,6 +61,17 @@ BAD = [
     ({"process": {"colour": "red"}}, "process.colour", "unknown key"),
     ({"processes": {}}, "processes", "unknown section"),
     ({"process": {"kind": "rolling"}}, "process.kind", "extrusion"),
+    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 0.0}}, "geometry.die_angle", "(0, 90)"),
+    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}}, "geometry.die_angle", "(0, 90)"),
+    ({"process": {"kind": "drawing"}, "geometry": {"land_length": -0.1}}, "geometry.land_length", ">= 0"),
+    ({"process": {"kind": "drawing"}, "geometry": {"land_length": 9.0}}, "geometry.land_length", "end before"),
+    ({"process": {"kind": "drawing"}, "geometry": {"exit_thickness": 1.625}}, "geometry.exit_thickness", "reduce"),
+    ({"process": {"kind": "drawing"}, "friction": {"mollification_length": 0.0}}, "friction.mollification_length",
+     "> 0"),
+    ({"process": {"kind": "drawing"}, "friction": {"normal_stress": "nodal"}}, "friction.normal_stress", "averaged"),
+    ({"process": {"kind": "drawing", "drive": "shove"}}, "process.drive", "push, pull"),
+    ({"solver": {"force_tolerance": 2.0}}, "solver.force_tolerance", "(0, 1)"),
+    ({"output": {"die_pressure": "mean"}}, "output.die_pressure", "penalty, stress"),
 ]
 
 
@@ -73,6 +84,16 @@ def test_invalid_values_name_the_key(sections, key, phrase):
         scene_from_dict(data)
     assert error.value.key == key
     assert phrase in error.value.message
+
+
+def test_drawing_defaults_are_the_papers_example2():
+    scene = load_scene(DEMOS / "example2_drawing.toml")
+    assert scene.process.velocity == 1000.0 and scene.geometry.die_angle == 6.0
+    assert scene.material.A == pytest.approx(100 * 3**0.5)
+    assert (scene.penalty.d, scene.penalty.d_N, scene.friction.d_T) == (0.005, 0.01, 1e-6)
+    assert scene_from_dict({"process": {"kind": "drawing"}}).discretisation.element == "Q1"
+    assert [load_scene(DEMOS / f"example2_drawing{s}.toml").friction.mu for s in ("", "_mu02", "_mu04")] == [
+        0.0, 0.2, 0.4]
 
 
 def test_missing_process_kind():

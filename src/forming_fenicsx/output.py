@@ -42,3 +42,13 @@ def write_fields(path: Path, mesh, fields) -> None:
         xdmf.write_mesh(mesh)
         for field in fields:
             xdmf.write_function(field)
+
+
+def write_die_profile(path: Path, profile: dict) -> None:
+    """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets it)."""
+    names = list(profile)
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(names)
+        for row in zip(*(profile[name] for name in names)):
+            writer.writerow([f"{value:.8g}" for value in row])

@@ -80,3 +80,27 @@ def _finish(fig, ax, outlines: np.ndarray, path: Path) -> Path:
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
+
+
+def write_die_plot(profile: dict, path: Path, title: str) -> Path:
+    """die.png: contact pressure (and averaged normal stress, friction stress) along the die."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4))
+    labels = {"contact_pressure": "contact pressure -sigma_N", "averaged_normal_stress": "averaged normal stress",
+              "friction_stress": "friction stress |sigma_T|"}
+    for key, label in labels.items():
+        if key in profile:
+            ax.plot(profile["s"], profile[key], marker=".", label=label)
+    ax.set_xlabel("s, distance along the die from where the workpiece meets it")
+    ax.set_ylabel("stress")
+    ax.set_title(f"{title}: die stresses")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path

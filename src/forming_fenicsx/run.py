@@ -11,9 +11,9 @@ from mpi4py import MPI
 
 from .forms import FlowProblem
 from .geometry import build_mesh
-from .output import write_fields, write_history, write_summary
-from .plotting import write_figures
-from .postprocess import force_balance, output_fields, scalars
+from .output import write_die_profile, write_fields, write_history, write_summary
+from .plotting import write_die_plot, write_figures
+from .postprocess import die_profile, force_balance, output_fields, scalars
 from .scene import Scene
 from .solvers import SecantSolver, SolveResult
 
@@ -56,7 +56,11 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
     if scene.output.figures:
         write_figures(problem, out, title or scene.process.kind)
+    profile = die_profile(problem)
     if comm.rank == 0:
+        write_die_profile(out / "die.csv", profile)
+        if scene.output.figures:
+            write_die_plot(profile, out / "die.png", title or scene.process.kind)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"

@@ -127,6 +127,12 @@ class SecantSolver:
             log.info("force balance residual %.3e (tolerance %.1e)", residual, tolerance)
         return residual < tolerance
 
+    def _balance_note(self, result: SolveResult) -> str:
+        if not result.force_balance_checks:
+            return ""
+        return (f"; force balance residual {result.force_balance_checks[-1]:.3e} above "
+                f"solver.force_tolerance {self.settings.force_tolerance:g}")
+
     def solve(self) -> SolveResult:
         """Iterate from a uniform modulus until the stopping rule of (4.4) holds."""
         problem, settings = self.problem, self.settings
@@ -151,7 +157,7 @@ class SecantSolver:
                     break
             else:
                 result.reason = (f"no convergence in {settings.max_iterations} iterations "
-                                 f"(last increment {increment:.3e} >= delta {delta:g})")
+                                 f"(last increment {increment:.3e}, delta {delta:g}{self._balance_note(result)})")
                 return result
             if outer_limit == 1:
                 break
@@ -163,9 +169,14 @@ class SecantSolver:
             if outer_increment < delta and self._balanced(result):
                 break
         else:
-            result.reason = (f"no convergence of the friction (outer) loop in {settings.max_outer_iterations} "
-                             f"iterations (last change {outer_increment:.3e}); at this friction coefficient "
-                             "the solution may not be unique")
+            if outer_increment < delta:
+                result.reason = (f"the force balance did not converge in {settings.max_outer_iterations} outer "
+                                 f"iterations{self._balance_note(result)}, though the outer change "
+                                 f"{outer_increment:.3e} is below delta")
+            else:
+                result.reason = (f"no convergence of the friction (outer) loop in {settings.max_outer_iterations} "
+                                 f"iterations (last change {outer_increment:.3e}); at this friction coefficient "
+                                 "the solution may not be unique")
             return result
         result.converged = True
         result.reason = "increment below tolerance"
