@@ -198,7 +198,9 @@ class Discretisation:
 class Solver:
     """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4).
 
-    ``force_tolerance`` (off by default, as in the paper) also requires the x force balance residual
+    ``stall_window``: inner iterations (a fifth of it for outer ones) without a new smallest increment
+    after which the run stops as stalled or oscillating. ``force_tolerance`` (off by default, as in the
+    paper) also requires the x force balance residual
     to fall below it before the run counts as converged: a small increment is not a small error.
     """
 
@@ -206,6 +208,7 @@ class Solver:
     tolerance: float = 1e-4
     max_iterations: int = 200
     max_outer_iterations: int = 50
+    stall_window: int = 40
     reference_strain_rate: float | None = None
     force_tolerance: float | None = None
     petsc_options: dict[str, Any] = field(default_factory=lambda: {
@@ -216,7 +219,7 @@ class Solver:
             raise SceneError("solver.method", f"must be one of direct, modified; got {self.method!r}")
         if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
             raise SceneError("solver.tolerance", f"must lie in (0, 1) (delta of (4.4)); got {self.tolerance}")
-        for key in ("max_iterations", "max_outer_iterations"):
+        for key in ("max_iterations", "max_outer_iterations", "stall_window"):
             if getattr(self, key) < 1:
                 raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
         force = self.force_tolerance

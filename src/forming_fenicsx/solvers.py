@@ -66,6 +66,17 @@ class LinearSolver:
         self.b.destroy()
 
 
+def stalled(increments: list[float], window: int) -> bool:
+    """True when the last ``window`` increments brought no new smallest one (stall or oscillation)."""
+    if len(increments) <= window:
+        return False
+    return min(increments[-window:]) >= min(increments[:-window])
+
+
+def _recent(increments: list[float], count: int = 6) -> str:
+    return ", ".join(f"{value:.2e}" for value in increments[-count:])
+
+
 @dataclass
 class IterationRecord:
     """One linear solve: outer index m, inner index n, relative increment, elapsed seconds."""
@@ -142,16 +153,25 @@ class SecantSolver:
         problem.set_uniform_secant(problem.scene.reference_strain_rate)
         self._step(result, 0, 0, start)
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
+        outer_increments: list[float] = []
         for outer in range(outer_limit):
             result.outer_iterations = outer + 1
             outer_start = problem.u.copy()
             if method == "modified":
                 problem.freeze_friction(problem.u)
+            increments: list[float] = []
             for inner in range(1, settings.max_iterations + 1):
                 problem.update_state(problem.u, friction_too=(method == "direct"))
                 increment = self._step(result, outer, inner, start)
+                increments.append(increment)
                 if not math.isfinite(increment):
                     result.reason = f"non-finite increment at outer {outer}, inner {inner}"
+                    return result
+                if stalled(increments, settings.stall_window):
+                    result.reason = (f"stalled or oscillating: no smaller increment in the last {settings.stall_window} "
+                                     f"iterations (outer {outer}, inner {inner}; last increments {_recent(increments)})"
+                                     f"{'; at this friction coefficient the solution may not be unique' if problem.has_friction else ''}"
+                                     "; see history.csv")
                     return result
                 if increment < delta and (method == "modified" and problem.has_friction or self._balanced(result)):
                     break
@@ -164,10 +184,16 @@ class SecantSolver:
             change = petsc_vec(outer_start)
             change.axpy(-1.0, petsc_vec(problem.u))
             outer_increment = change.norm() / petsc_vec(problem.u).norm()
+            outer_increments.append(outer_increment)
             if problem.comm.rank == 0:
                 log.info("outer %d done: ||u0,m+1 - u0,m||/||u0,m+1|| = %.3e", outer, outer_increment)
             if outer_increment < delta and self._balanced(result):
                 break
+            if stalled(outer_increments, max(2, settings.stall_window // 5)):
+                result.reason = (f"the friction (outer) loop stalls or oscillates: outer changes "
+                                 f"{_recent(outer_increments)}; at this friction coefficient the solution may "
+                                 "not be unique; see history.csv")
+                return result
         else:
             if outer_increment < delta:
                 result.reason = (f"the force balance did not converge in {settings.max_outer_iterations} outer "
