@@ -16,7 +16,7 @@ from forming_fenicsx.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
 SLIP_LINE_Q = 250.0
-PARTS = ["table", "measures", "drive", "methods"]
+PARTS = ["table", "measures", "drive", "penalty", "methods"]
 parser = argparse.ArgumentParser()
 parser.add_argument("--scene", default=str(Path(__file__).with_name("example2_drawing.toml")))
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.1, 0.05, 0.025])
@@ -104,11 +104,19 @@ table(f"Pulling at the exit or pushing at the entry (mu = 0, h = {size})",
       [[r["element"], r["drive"], r["mean_die_pressure"], r["projected_die_pressure"], r["drawing_stress"],
         f"{r['force_balance_residual']:.1e}"] for r in results["drive"]])
 
-# ## 4. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
+# ## 4. The volumetric penalty d (mu = 0, Q2 reduced)
+for d in (5e-3, 5e-4, 5e-5, 5e-6) if "penalty" in args.parts else []:
+    s = run(f"discretisation.mesh_size={size}", *ELEMENTS["Q2 reduced"], *CONVERGED, f"penalty.d={d}")
+    results["penalty"].append({"d": d, **s})
+table(f"The volumetric penalty (mu = 0, Q2 reduced, h = {size})", ["d", "q_av", "drawing stress", "||div u||"],
+      [[r["d"], r["mean_die_pressure"], r["drawing_stress"], r["divergence_l2"]] for r in results["penalty"]])
+
+# ## 5. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
 for mu in (0.0, 0.2, 0.4) if "methods" in args.parts else []:
     for method in ("direct", "modified"):
         s = run(f"friction.mu={mu}", f"discretisation.mesh_size={size}", f"solver.method={method}",
-                "solver.max_iterations=2000", "output.fields=false", "output.figures=false")
+                "solver.force_tolerance=0", "solver.max_iterations=2000", "output.fields=false",
+                "output.figures=false")
         results["methods"].append({"mu": mu, "method": method, **s})
 table(f"Secant-modulus methods at delta = 1e-4, no force criterion (Q1 complete, h = {size})",
       ["mu", "method", "linear solves", "outer iterations", "wall s", "q_av", "drawing stress", "force balance"],

@@ -70,7 +70,7 @@ BAD = [
      "> 0"),
     ({"process": {"kind": "drawing"}, "friction": {"normal_stress": "nodal"}}, "friction.normal_stress", "averaged"),
     ({"process": {"kind": "drawing", "drive": "shove"}}, "process.drive", "push, pull"),
-    ({"solver": {"force_tolerance": 2.0}}, "solver.force_tolerance", "(0, 1)"),
+    ({"solver": {"force_tolerance": 2.0}}, "solver.force_tolerance", "[0, 1)"),
     ({"output": {"die_pressure": "mean"}}, "output.die_pressure", "penalty, stress"),
 ]
 

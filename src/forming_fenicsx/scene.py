@@ -199,7 +199,7 @@ class Solver:
     """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4).
 
     ``stall_window``: inner iterations (a fifth of it for outer ones) without a new smallest increment
-    after which the run stops as stalled or oscillating. ``force_tolerance`` (off by default, as in the
+    after which the run stops as stalled or oscillating. ``force_tolerance`` (0: off, as in the
     paper) also requires the x force balance residual
     to fall below it before the run counts as converged: a small increment is not a small error.
     """
@@ -210,7 +210,7 @@ class Solver:
     max_outer_iterations: int = 50
     stall_window: int = 40
     reference_strain_rate: float | None = None
-    force_tolerance: float | None = None
+    force_tolerance: float = 0.0
     petsc_options: dict[str, Any] = field(default_factory=lambda: {
         "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"})
 
@@ -222,9 +222,8 @@ class Solver:
         for key in ("max_iterations", "max_outer_iterations", "stall_window"):
             if getattr(self, key) < 1:
                 raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
-        force = self.force_tolerance
-        if force is not None and not (math.isfinite(force) and 0 < force < 1):
-            raise SceneError("solver.force_tolerance", f"must lie in (0, 1); got {force}")
+        if not (math.isfinite(self.force_tolerance) and 0 <= self.force_tolerance < 1):
+            raise SceneError("solver.force_tolerance", f"must lie in [0, 1) (0: off); got {self.force_tolerance}")
         rate = self.reference_strain_rate
         if rate is not None and not (math.isfinite(rate) and rate > 0):
             raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")

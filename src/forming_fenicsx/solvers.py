@@ -129,7 +129,7 @@ class SecantSolver:
     def _balanced(self, result: SolveResult) -> bool:
         """The optional force-balance criterion, evaluated with every coefficient at the iterate."""
         tolerance = self.settings.force_tolerance
-        if tolerance is None or self.balance is None:
+        if tolerance == 0 or self.balance is None:
             return True
         self.problem.update_state(self.problem.u, friction_too=True)
         residual = self.balance()
