@@ -13,6 +13,7 @@ from mpi4py import MPI
 
 from forming_fenicsx import load_scene
 from forming_fenicsx.postprocess import ram_face_pressure_model
+from forming_fenicsx.report import markdown_table, richardson
 from forming_fenicsx.run import solve_scene
 
 HILL = 1 + math.pi / 2
@@ -36,16 +37,7 @@ def run(*overrides: str) -> dict:
 
 def table(title: str, header: list[str], rows: list[list]) -> None:
     if rank0 and rows:
-        print(f"\n### {title}\n\n| " + " | ".join(header) + " |\n|" + "---|" * len(header))
-        for row in rows:
-            print("| " + " | ".join(f"{v:.5g}" if isinstance(v, float) else str(v) for v in row) + " |")
-
-
-def richardson(values: list[float]) -> tuple[float, float]:
-    """Limit and observed order from the last three values of a halving sequence."""
-    a, b, c = values[-3:]
-    order = math.log2((a - b) / (b - c))
-    return c - (b - c) / (2**order - 1), order
+        print(markdown_table(title, header, rows))
 
 
 results: dict = {part: [] for part in PARTS}

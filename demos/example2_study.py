@@ -12,6 +12,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
+from forming_fenicsx.report import markdown_table, richardson
 from forming_fenicsx.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
@@ -42,17 +43,7 @@ def run(*overrides: str) -> dict:
 
 def table(title: str, header: list[str], rows: list[list]) -> None:
     if rank0 and rows:
-        print(f"\n### {title}\n\n| " + " | ".join(header) + " |\n|" + "---|" * len(header))
-        for row in rows:
-            print("| " + " | ".join(f"{v:.5g}" if isinstance(v, float) else str(v) for v in row) + " |")
-
-
-def richardson(values: list[float]) -> tuple[float, float]:
-    a, b, c = values[-3:]
-    if (a - b) * (b - c) <= 0:
-        return float("nan"), float("nan")
-    order = math.log2((a - b) / (b - c))
-    return c - (b - c) / (2**order - 1), order
+        print(markdown_table(title, header, rows))
 
 
 results: dict = {part: [] for part in PARTS}

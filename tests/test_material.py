@@ -44,3 +44,4 @@ def test_laws_breaking_2_10_are_rejected(law, key):
     with pytest.raises(SceneError) as error:
         law.check()
     assert error.value.key == key
+

@@ -45,27 +45,22 @@ class Process:
             raise SceneError("process.drive", f"must be one of push, pull; got {self.drive!r}")
 
 
-@dataclass
-class ExtrusionGeometry:
-    """Plane-strain extrusion through a square die (Example 1); full thicknesses, half model built."""
+def _check_strip(geometry, positive: tuple[str, ...]) -> None:
+    """Lengths finite and > 0, and a die that reduces the thickness."""
+    for key in positive:
+        value = getattr(geometry, key)
+        if not (math.isfinite(value) and value > 0):
+            raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
+    if geometry.exit_thickness >= geometry.entry_thickness:
+        raise SceneError("geometry.exit_thickness",
+                         f"must be < geometry.entry_thickness ({geometry.entry_thickness}): "
+                         f"the die must reduce; got {geometry.exit_thickness}")
 
-    length: float = 20.0
-    entry_thickness: float = 10.0
-    exit_thickness: float = 5.0
-    die_position: float = 10.0
 
-    def check(self) -> None:
-        for key in ("length", "entry_thickness", "exit_thickness", "die_position"):
-            value = getattr(self, key)
-            if not (math.isfinite(value) and value > 0):
-                raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
-        if self.exit_thickness >= self.entry_thickness:
-            raise SceneError("geometry.exit_thickness",
-                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
-                             f"the die must reduce; got {self.exit_thickness}")
-        if self.die_position >= self.length:
-            raise SceneError("geometry.die_position",
-                             f"must be < geometry.length ({self.length}); got {self.die_position}")
+class _Strip:
+    """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares."""
+
+    exit_thickness: float
 
     @property
     def thinnest(self) -> float:
@@ -74,7 +69,23 @@ class ExtrusionGeometry:
 
 
 @dataclass
-class DrawingGeometry:
+class ExtrusionGeometry(_Strip):
+    """Plane-strain extrusion through a square die (Example 1); full thicknesses, half model built."""
+
+    length: float = 20.0
+    entry_thickness: float = 10.0
+    exit_thickness: float = 5.0
+    die_position: float = 10.0
+
+    def check(self) -> None:
+        _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_position"))
+        if self.die_position >= self.length:
+            raise SceneError("geometry.die_position",
+                             f"must be < geometry.length ({self.length}); got {self.die_position}")
+
+
+@dataclass
+class DrawingGeometry(_Strip):
     """Plane-strain strip drawing through a conical die with a land (Example 2); full thicknesses.
 
     The strip meets the die at x = die_entry; the die face falls at the semi-angle die_angle (degrees)
@@ -89,14 +100,7 @@ class DrawingGeometry:
     die_entry: float = 3.0
 
     def check(self) -> None:
-        for key in ("length", "entry_thickness", "exit_thickness", "die_entry"):
-            value = getattr(self, key)
-            if not (math.isfinite(value) and value > 0):
-                raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
-        if self.exit_thickness >= self.entry_thickness:
-            raise SceneError("geometry.exit_thickness",
-                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
-                             f"the die must reduce; got {self.exit_thickness}")
+        _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_entry"))
         if not (math.isfinite(self.die_angle) and 0 < self.die_angle < 90):
             raise SceneError("geometry.die_angle", f"must lie in (0, 90) degrees (the semi-angle); got {self.die_angle}")
         if not (math.isfinite(self.land_length) and self.land_length >= 0):
@@ -115,11 +119,6 @@ class DrawingGeometry:
     def die_exit(self) -> float:
         """x at the end of the land."""
         return self.die_entry + self.cone_length + self.land_length
-
-    @property
-    def thinnest(self) -> float:
-        """Half-thickness of the thinnest section (the half model's exit)."""
-        return 0.5 * self.exit_thickness
 
 
 NORMAL_STRESSES = ("averaged", "local")

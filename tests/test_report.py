@@ -1,0 +1,19 @@
+"""Measurement helpers."""
+import math
+
+import pytest
+
+from forming_fenicsx.report import markdown_table, richardson
+
+
+def test_richardson_recovers_a_known_limit():
+    values = [2.0 + 3.0 * h**1.5 for h in (0.4, 0.2, 0.1)]
+    limit, order = richardson(values)
+    assert limit == pytest.approx(2.0, rel=1e-12) and order == pytest.approx(1.5, rel=1e-12)
+    assert math.isnan(richardson([1.0, 2.0, 1.5])[0])
+
+
+def test_markdown_table():
+    text = markdown_table("T", ["a", "b"], [[1.234567, "x"]])
+    assert text.splitlines()[-1] == "| 1.2346 | x |"
+    assert markdown_table("T", ["a"], []) == ""
