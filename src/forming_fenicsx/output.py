@@ -50,5 +50,5 @@ def write_die_profile(path: Path, profile: dict) -> None:
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(names)
-        for row in zip(*(profile[name] for name in names)):
+        for row in zip(*(profile[name] for name in names), strict=True):
             writer.writerow([f"{value:.8g}" for value in row])

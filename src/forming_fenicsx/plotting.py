@@ -26,7 +26,7 @@ def _gather_cells(problem: FlowProblem):
     parts = problem.comm.gather((outlines, rate, ux, uy), root=0)
     if problem.comm.rank != 0:
         return None
-    return [np.concatenate(p) for p in zip(*parts)]
+    return [np.concatenate(p) for p in zip(*parts, strict=True)]
 
 
 def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Path]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+import types
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -321,7 +322,7 @@ def _typename(tp: Any) -> str:
 def _coerce(key: str, value: Any, tp: Any) -> Any:
     """Check a TOML value against a field type; integers are accepted where numbers are."""
     origin = typing.get_origin(tp)
-    if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
+    if origin in (typing.Union, types.UnionType):
         for option in typing.get_args(tp):
             if option is type(None):
                 continue
