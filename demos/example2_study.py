@@ -17,7 +17,7 @@ from forming_fenicsx.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
 SLIP_LINE_Q = 250.0
-PARTS = ["table", "measures", "drive", "penalty", "methods"]
+PARTS = ["table", "measures", "drive", "penalty", "rate", "methods"]
 parser = argparse.ArgumentParser()
 parser.add_argument("--scene", default=str(Path(__file__).with_name("example2_drawing.toml")))
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.1, 0.05, 0.025])
@@ -104,7 +104,17 @@ table(f"The penalties (mu = 0, Q2 reduced, h = {size})", ["penalty", "value", "q
       [[r["penalty"], r["value"], r["mean_die_pressure"], r["drawing_stress"], r["divergence_l2"]]
        for r in results["penalty"]])
 
-# ## 5. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
+# ## 5. Rate sensitivity and the flux through the free strip surfaces (mu = 0, Q2 reduced)
+for alpha in (1e-3, 1e-5) if "rate" in args.parts else []:
+    for size_r in args.sizes[1:]:
+        s = run(f"discretisation.mesh_size={size_r}", *ELEMENTS["Q2 reduced"], *CONVERGED, f"material.alpha={alpha}")
+        results["rate"].append({"alpha": alpha, "mesh_size": size_r, **s})
+table("Rate sensitivity alpha, and volume crossing the free strip surfaces over the throughput (mu = 0, Q2)",
+      ["alpha", "h", "q_av", "drawing stress", "free surface crossing"],
+      [[r["alpha"], r["mesh_size"], r["mean_die_pressure"], r["drawing_stress"], r["free_surface_crossing"]]
+       for r in results["rate"]])
+
+# ## 6. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
 for mu in (0.0, 0.2, 0.4) if "methods" in args.parts else []:
     for method in ("direct", "modified"):
         s = run(f"friction.mu={mu}", f"discretisation.mesh_size={size}", f"solver.method={method}",

@@ -143,6 +143,17 @@ def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
             "contact_end_x": problem.comm.bcast(end, root=0)}
 
 
+def free_surface_crossing(problem: FlowProblem) -> float:
+    """Volume crossing the free strip surfaces (Gamma2, Gamma4 facets whose normal is mostly along y),
+    in or out, relative to the flux through Gamma1: zero for a steady state whose free surfaces are
+    streamlines, so it measures what the fixed-domain model (2.6) lets cross them."""
+    surface = ufl.conditional(ufl.gt(abs(problem.n[1]), 0.5), 1.0, 0.0)
+    out = sum(_integrate(problem, abs(ufl.dot(problem.u, problem.n)) * surface * problem.ds(ROLES[role]))
+              for role in ("gamma2_free", "gamma4_free") if role in problem.roles)
+    through = _integrate(problem, ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma1_velocity"]))
+    return out / abs(through)
+
+
 def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
     """(relative residual, Gamma1 force, die normal x-force, die friction x-force, applied x-force) of the
     x force balance Gamma1 force + applied force = die force (verification.md), at the current state."""
@@ -176,6 +187,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "applied_force_x": external,
         "force_balance_residual": residual,
         "divergence_l2": np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)),
+        "free_surface_crossing": free_surface_crossing(problem),
     }
 
 
