@@ -17,7 +17,7 @@ from forming_fenicsx.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
 SLIP_LINE_Q = 250.0
-PARTS = ["table", "measures", "drive", "penalty", "rate", "methods"]
+PARTS = ["table", "measures", "drive", "penalty", "rate", "exact", "methods"]
 parser = argparse.ArgumentParser()
 parser.add_argument("--scene", default=str(Path(__file__).with_name("example2_drawing.toml")))
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.1, 0.05, 0.025])
@@ -114,7 +114,30 @@ table("Rate sensitivity alpha, and volume crossing the free strip surfaces over 
       [[r["alpha"], r["mesh_size"], r["mean_die_pressure"], r["drawing_stress"], r["free_surface_crossing"]]
        for r in results["rate"]])
 
-# ## 6. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
+# ## 6. Verification against an exact slip-line field (Hill): frictionless drawing through a wedge at the
+# reduction r = 2 sin(a)/(1 + 2 sin(a)), where a triangle and a centred fan of angle a make the whole field;
+# equilibrium along it gives q = 2k(1 + a)(1 - r) and the drawing stress t = 2k(1 + a) r.
+angle = math.radians(geometry.die_angle)
+r_exact = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
+k = load_scene(args.scene).material.flow_stress(__import__("numpy").array([1.0]))[0] / math.sqrt(3)
+exact_q, exact_t = 2 * k * (1 + angle) * (1 - r_exact), 2 * k * (1 + angle) * r_exact
+for size_e in args.sizes if "exact" in args.parts else []:
+    s = run(f"geometry.exit_thickness={h0 * (1 - r_exact)}", f"discretisation.mesh_size={size_e}",
+            *ELEMENTS["Q2 reduced"], *CONVERGED)
+    results["exact"].append({"mesh_size": size_e, "exact_q": exact_q, "exact_t": exact_t, **s})
+if len(results["exact"]) >= 3:
+    for key in ("mean_die_pressure", "drawing_stress"):
+        limit, order = richardson([r[key] for r in results["exact"]])
+        results["extrapolated"].append({"mu": 0.0, "element": "Q2 reduced", "quantity": f"exact-field {key}",
+                                        "value": limit, "order": order})
+        results["exact"].append({"mesh_size": "extrapolated", key: limit})
+table(f"Exact slip-line field, r = {r_exact:.4f} (k = {k:.3f}: q = {exact_q:.2f}, t = {exact_t:.3f}), Q2 reduced",
+      ["h", "q_av", "error", "drawing stress", "error"],
+      [[r["mesh_size"], r.get("mean_die_pressure", math.nan), f"{100 * (r.get('mean_die_pressure', math.nan) / exact_q - 1):+.2f}%",
+        r.get("drawing_stress", math.nan), f"{100 * (r.get('drawing_stress', math.nan) / exact_t - 1):+.2f}%"]
+       for r in results["exact"]])
+
+# ## 7. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
 for mu in (0.0, 0.2, 0.4) if "methods" in args.parts else []:
     for method in ("direct", "modified"):
         s = run(f"friction.mu={mu}", f"discretisation.mesh_size={size}", f"solver.method={method}",

@@ -168,12 +168,14 @@ class SecantSolver:
                     result.reason = f"non-finite increment at outer {outer}, inner {inner}"
                     return result
                 if stalled(increments, settings.stall_window):
-                    result.reason = (f"stalled or oscillating: no smaller increment in the last {settings.stall_window} "
-                                     f"iterations (outer {outer}, inner {inner}; last increments {_recent(increments)})"
-                                     f"{'; at this friction coefficient the solution may not be unique' if problem.has_friction else ''}"
-                                     "; see history.csv")
+                    friction_note = "; at this friction coefficient the solution may not be unique" \
+                        if problem.has_friction else ""
+                    result.reason = (f"stalled or oscillating: no smaller increment in the last "
+                                     f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
+                                     f"increments {_recent(increments)}){friction_note}; see history.csv")
                     return result
-                if increment < delta and (method == "modified" and problem.has_friction or self._balanced(result)):
+                # with an outer (friction) loop, the force balance is checked when that loop converges
+                if increment < delta and (outer_limit > 1 or self._balanced(result)):
                     break
             else:
                 result.reason = (f"no convergence in {settings.max_iterations} iterations "
