@@ -126,11 +126,12 @@ for size_e in args.sizes if "exact" in args.parts else []:
             *ELEMENTS["Q2 reduced"], *CONVERGED)
     results["exact"].append({"mesh_size": size_e, "exact_q": exact_q, "exact_t": exact_t, **s})
 if len(results["exact"]) >= 3:
+    limits = {}
     for key in ("mean_die_pressure", "drawing_stress"):
-        limit, order = richardson([r[key] for r in results["exact"]])
+        limits[key], order = richardson([r[key] for r in results["exact"]])
         results["extrapolated"].append({"mu": 0.0, "element": "Q2 reduced", "quantity": f"exact-field {key}",
-                                        "value": limit, "order": order})
-        results["exact"].append({"mesh_size": "extrapolated", key: limit})
+                                        "value": limits[key], "order": order})
+    results["exact"].append({"mesh_size": "extrapolated", **limits})
 table(f"Exact slip-line field, r = {r_exact:.4f} (k = {k:.3f}: q = {exact_q:.2f}, t = {exact_t:.3f}), Q2 reduced",
       ["h", "q_av", "error", "drawing stress", "error"],
       [[r["mesh_size"], r.get("mean_die_pressure", math.nan), f"{100 * (r.get('mean_die_pressure', math.nan) / exact_q - 1):+.2f}%",
