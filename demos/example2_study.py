@@ -22,6 +22,10 @@ parser = argparse.ArgumentParser()
 parser.add_argument("--scene", default=str(Path(__file__).with_name("example2_drawing.toml")))
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.1, 0.05, 0.025])
 parser.add_argument("--parts", nargs="+", default=PARTS, choices=PARTS)
+parser.add_argument("--mu", type=float, nargs="+", default=[0.0, 0.2, 0.4], choices=[0.0, 0.2, 0.4],
+                    help="friction coefficients of the reproduction table")
+parser.add_argument("--elements", nargs="+", default=["Q1 complete", "Q2 reduced"],
+                    choices=["Q1 complete", "Q2 reduced"], help="elements of the reproduction table")
 parser.add_argument("--out", default="results/example2_study")
 args = parser.parse_args()
 rank0 = MPI.COMM_WORLD.rank == 0
@@ -50,8 +54,9 @@ results: dict = {part: [] for part in PARTS}
 results["extrapolated"] = []
 
 # ## 1. The reproduction table: q_av and drawing stress for each mu, element and mesh
-for mu in (0.0, 0.2, 0.4) if "table" in args.parts else []:
-    for element, settings in ELEMENTS.items():
+for mu in args.mu if "table" in args.parts else []:
+    for element in args.elements:
+        settings = ELEMENTS[element]
         rows = []
         for size in args.sizes:
             s = run(f"friction.mu={mu}", f"discretisation.mesh_size={size}", *settings, *CONVERGED)
