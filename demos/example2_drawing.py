@@ -31,7 +31,7 @@ configure_logging(quiet=True, rank=MPI.COMM_WORLD.rank)
 rows, converged = [], True
 for name, paper_q in PAPER.items():
     scene = load_scene(Path(__file__).with_name(f"{name}.toml"), args.set)
-    summary = run_scene(scene, Path("results") / name, title=name)
+    summary = run_scene(scene, Path("results") / name, title=name, overwrite=True)
     converged &= summary["converged"]
     rows.append((scene.friction.mu, summary, paper_q))
 

@@ -46,3 +46,30 @@ def test_not_converged_exits_non_zero_and_keeps_last_iterate(shared_tmp, capsys)
     assert summary["converged"] is False and "3 iterations" in summary["reason"]
     assert summary["linear_solves"] == 4
     assert (out / "fields.xdmf").exists()
+
+
+def test_existing_output_is_kept_without_force_and_replaced_with_it(shared_tmp, capsys):
+    out = shared_tmp / "existing"
+    if MPI.COMM_WORLD.rank == 0:
+        out.mkdir()
+        (out / "mine.txt").write_text("keep me")
+    MPI.COMM_WORLD.barrier()
+    assert main(["run", DEMO, "--out", str(out), *COARSE]) == 2
+    assert (out / "mine.txt").read_text() == "keep me"
+    if MPI.COMM_WORLD.rank == 0:
+        assert "--force" in capsys.readouterr().err
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--force", "--set", "output.fields=false"]) == 0
+    MPI.COMM_WORLD.barrier()
+    assert not (out / "mine.txt").exists() and (out / "summary.json").exists()
+    assert not [p for p in shared_tmp.iterdir() if ".partial-" in p.name]  # no staging folder left
+
+
+def test_failed_linear_solve_stops_with_reason_and_keeps_last_iterate(shared_tmp):
+    out = shared_tmp / "ksp"
+    # an unpreconditioned CG limited to 2 iterations cannot solve the first system
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-ksp_type", "cg", "-pc_type", "none",
+                 "-ksp_max_it", "2"]) == 3
+    MPI.COMM_WORLD.barrier()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["converged"] is False
+    assert "linear solve failed at outer 0, inner 0" in summary["reason"] and "penalty" in summary["reason"]

@@ -49,6 +49,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                      help="override a scene value (repeatable)")
     run.add_argument("--quiet", action="store_true", help="log warnings only")
+    run.add_argument("--force", action="store_true", help="replace an existing output folder")
     mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
     mesh.add_argument("scene", help="scene TOML file")
     mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
@@ -100,7 +101,18 @@ def main(argv: list[str] | None = None) -> int:
 
     configure_logging(args.quiet, comm.rank)
     out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
-    summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem)
+    try:
+        summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem, overwrite=args.force)
+    except FileExistsError as error:
+        if comm.rank == 0:
+            print(f"forming: {error}", file=sys.stderr)
+        return 2
+    except Exception as error:  # one rank's failure must end every rank, not leave them waiting
+        print(f"forming: error on rank {comm.rank} of {comm.size}: {type(error).__name__}: {error}",
+              file=sys.stderr, flush=True)
+        if comm.size > 1:
+            comm.Abort(1)
+        return 1
     if not summary["converged"]:
         if comm.rank == 0:
             print(f"forming: not converged: {summary['reason']}; the last iterate's results are in {out}",

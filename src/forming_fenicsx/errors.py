@@ -9,3 +9,7 @@ class SceneError(ValueError):
         self.key = key
         self.message = message
 
+
+
+class LinearSolveError(RuntimeError):
+    """A linear solve of the iteration failed; PETSc's reason is the same on every rank."""

@@ -51,7 +51,7 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
     ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.8", linewidths=0.3))
     stride = max(1, len(centres) // 600)
     ax.quiver(centres[::stride, 0], centres[::stride, 1], ux[::stride], uy[::stride], angles="xy",
-              scale_units="xy", scale=np.abs(ux).max() / (0.6 * np.sqrt(extent.prod() / len(centres) * stride)),
+              scale_units="xy", scale=(np.abs(ux).max() or 1.0) / (0.6 * np.sqrt(extent.prod() / len(centres) * stride)),
               width=0.002)
     ax.set_title(f"{title}: velocity vectors")
     paths.append(_finish(fig, ax, outlines, directory / "velocity.png"))

@@ -151,7 +151,7 @@ def free_surface_crossing(problem: FlowProblem) -> float:
     out = sum(_integrate(problem, abs(ufl.dot(problem.u, problem.n)) * surface * problem.ds(ROLES[role]))
               for role in ("gamma2_free", "gamma4_free") if role in problem.roles)
     through = _integrate(problem, ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma1_velocity"]))
-    return out / abs(through)
+    return out / abs(through) if through else math.nan
 
 
 def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import logging
+import shutil
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -45,12 +47,39 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
-              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "") -> dict[str, Any]:
-    """Solve a scene and write summary.json, history.csv, fields.xdmf and the figures into ``out``."""
+              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False) -> dict[str, Any]:
+    """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into ``out``.
+
+    The files are written into a hidden staging folder beside ``out`` and moved into place only when
+    all are complete, so ``out`` never holds a half-written run. An existing ``out`` is replaced only
+    with ``overwrite`` (FileExistsError otherwise, before any work).
+    """
     out = Path(out)
+    exists = comm.bcast(out.exists() if comm.rank == 0 else None, root=0)
+    if exists and not overwrite:
+        raise FileExistsError(f"output folder {out} exists (use --force to replace it)")
+    staging = None
     if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    staging = Path(comm.bcast(str(staging) if staging else None, root=0))
+    try:
+        summary = _solve_and_write(scene, staging, petsc_options, comm, title)
+    except BaseException:
+        if comm.rank == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+        raise
     comm.barrier()
+    if comm.rank == 0:
+        if out.exists():
+            shutil.rmtree(out)
+        staging.rename(out)
+    comm.barrier()
+    return summary
+
+
+def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
+                     title: str) -> dict[str, Any]:
     problem, result, summary = solve_scene(scene, petsc_options, comm)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))

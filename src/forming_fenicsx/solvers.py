@@ -17,6 +17,7 @@ import dolfinx.fem.petsc
 from petsc4py import PETSc
 
 from .compat import petsc_vec
+from .errors import LinearSolveError
 from .forms import FlowProblem
 
 log = logging.getLogger(__name__)
@@ -54,10 +55,13 @@ class LinearSolver:
         dolfinx.fem.petsc.apply_lifting(self.b, [problem.a], bcs=[problem.bcs])
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, problem.bcs)
-        self.ksp.solve(self.b, petsc_vec(problem.u))
+        try:
+            self.ksp.solve(self.b, petsc_vec(problem.u))
+        except PETSc.Error as error:  # e.g. a zero pivot or a MUMPS failure: the same on every rank
+            raise LinearSolveError(f"PETSc error {error.ierr} in KSPSolve") from None
         reason = self.ksp.getConvergedReason()
         if reason < 0:
-            raise RuntimeError(f"linear solve failed (KSP reason {reason})")
+            raise LinearSolveError(f"KSP diverged (reason {reason})")
         problem.u.x.scatter_forward()
 
     def destroy(self) -> None:
@@ -112,10 +116,21 @@ class SecantSolver:
         self._previous = problem.u.copy()
 
     def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
-        """One linear solve from the current state; records and returns the relative increment."""
+        """One linear solve from the current state; records and returns the relative increment.
+
+        A failed solve restores the previous iterate and returns NaN with the reason in ``result``.
+        """
         u, previous = petsc_vec(self.problem.u), petsc_vec(self._previous)
         u.copy(previous)
-        self.linear.solve()
+        try:
+            self.linear.solve()
+        except LinearSolveError as error:
+            previous.copy(u)
+            self.problem.u.x.scatter_forward()
+            result.reason = (f"linear solve failed at outer {outer}, inner {inner}: {error}; the results are the "
+                             "previous iterate. Try a larger penalty parameter (penalty.d, penalty.d_N) or "
+                             "friction.d_T, or the default MUMPS LU solver")
+            return math.nan
         result.linear_solves += 1
         norm = u.norm()
         previous.axpy(-1.0, u)
@@ -151,7 +166,8 @@ class SecantSolver:
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
         problem.set_uniform_secant(problem.scene.reference_strain_rate)
-        self._step(result, 0, 0, start)
+        if not math.isfinite(self._step(result, 0, 0, start)):
+            return result
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
         outer_increments: list[float] = []
         for outer in range(outer_limit):
@@ -165,7 +181,8 @@ class SecantSolver:
                 increment = self._step(result, outer, inner, start)
                 increments.append(increment)
                 if not math.isfinite(increment):
-                    result.reason = f"non-finite increment at outer {outer}, inner {inner}"
+                    result.reason = result.reason or (f"non-finite increment (NaN or Inf) at outer {outer}, inner "
+                                                      f"{inner}; try a larger penalty parameter")
                     return result
                 if stalled(increments, settings.stall_window):
                     friction_note = "; at this friction coefficient the solution may not be unique" \
