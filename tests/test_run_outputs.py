@@ -1,6 +1,9 @@
 """`forming run`: the files of a run, their keys and contents, and a run that does not converge."""
 import csv
 import json
+import logging
+import os
+import signal
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
@@ -73,3 +76,30 @@ def test_failed_linear_solve_stops_with_reason_and_keeps_last_iterate(shared_tmp
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False
     assert "linear solve failed at outer 0, inner 0" in summary["reason"] and "penalty" in summary["reason"]
+
+
+class _SignalAtThirdIterate(logging.Handler):
+    """Sends SIGTERM to this process when rank 0 logs the third inner iterate (as a user would)."""
+
+    def emit(self, record):
+        if "inner   3" in record.getMessage():
+            os.kill(os.getpid(), signal.SIGTERM)
+
+
+def test_sigterm_ends_the_run_cleanly_with_the_last_iterate(shared_tmp):
+    out = shared_tmp / "sigterm"
+    logger = logging.getLogger("forming_fenicsx")
+    handler = _SignalAtThirdIterate()
+    logger.addHandler(handler)
+    try:
+        code = main(["run", DEMO, "--out", str(out), "--set", "discretisation.mesh_size=1.0",
+                     "--set", "output.fields=false", "--set", "output.figures=false"])
+    finally:
+        logger.removeHandler(handler)
+    MPI.COMM_WORLD.barrier()
+    assert code == 3
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["converged"] is False
+    assert summary["reason"].startswith("interrupted by SIGTERM at outer 0, inner 3")
+    assert summary["linear_solves"] == 4  # the uniform start and three secant iterates, all on every rank
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # the handler is restored

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
 from pathlib import Path
 
@@ -101,8 +102,18 @@ def main(argv: list[str] | None = None) -> int:
 
     configure_logging(args.quiet, comm.rank)
     out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
+    received: list[int] = []
+
+    def on_signal(signum, frame):
+        received.append(signum)
+
+    def stop() -> str | None:
+        return f"interrupted by {signal.Signals(received[0]).name}" if received else None
+
+    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem, overwrite=args.force)
+        summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem, overwrite=args.force,
+                            stop=stop)
     except FileExistsError as error:
         if comm.rank == 0:
             print(f"forming: {error}", file=sys.stderr)
@@ -113,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         if comm.size > 1:
             comm.Abort(1)
         return 1
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     if not summary["converged"]:
         if comm.rank == 0:
             print(f"forming: not converged: {summary['reason']}; the last iterate's results are in {out}",

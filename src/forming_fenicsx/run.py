@@ -6,7 +6,7 @@ import shutil
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import dolfinx
 from mpi4py import MPI
@@ -22,12 +22,14 @@ from .solvers import SecantSolver, SolveResult
 log = logging.getLogger(__name__)
 
 
-def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
-                comm: MPI.Comm = MPI.COMM_WORLD) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
-    """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary."""
+def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
+                stop: Callable[[], str | None] | None = None) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+    """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
+
+    ``stop`` is polled after every linear solve (see SecantSolver)."""
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
-    solver = SecantSolver(problem, petsc_options, balance=lambda: force_balance(problem)[0])
+    solver = SecantSolver(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
     result = solver.solve()
     solver.linear.destroy()
     problem.update_state(problem.u, friction_too=True)
@@ -47,7 +49,8 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
-              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False) -> dict[str, Any]:
+              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False,
+              stop: Callable[[], str | None] | None = None) -> dict[str, Any]:
     """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into ``out``.
 
     The files are written into a hidden staging folder beside ``out`` and moved into place only when
@@ -64,7 +67,7 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     staging = Path(comm.bcast(str(staging) if staging else None, root=0))
     try:
-        summary = _solve_and_write(scene, staging, petsc_options, comm, title)
+        summary = _solve_and_write(scene, staging, petsc_options, comm, title, stop)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(staging, ignore_errors=True)
@@ -79,8 +82,8 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
 
 
 def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
-                     title: str) -> dict[str, Any]:
-    problem, result, summary = solve_scene(scene, petsc_options, comm)
+                     title: str, stop: Callable[[], str | None] | None) -> dict[str, Any]:
+    problem, result, summary = solve_scene(scene, petsc_options, comm, stop)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
     if scene.output.figures:

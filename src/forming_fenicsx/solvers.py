@@ -105,11 +105,13 @@ class SecantSolver:
     """The direct (3.13) or modified (3.33) secant-modulus method for a FlowProblem."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None,
-                 balance: Callable[[], float] | None = None):
+                 balance: Callable[[], float] | None = None, stop: Callable[[], str | None] | None = None):
         """``balance`` returns the force balance residual at the current state; with
-        solver.force_tolerance set, convergence also needs it below that tolerance."""
+        solver.force_tolerance set, convergence also needs it below that tolerance. ``stop`` returns a
+        reason to stop (e.g. a signal) or None; it is polled on every rank after every linear solve."""
         self.problem = problem
         self.balance = balance
+        self.stop = stop
         settings = problem.scene.solver
         self.settings = settings
         self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
@@ -140,6 +142,12 @@ class SecantSolver:
         if self.problem.comm.rank == 0:
             log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment, record.elapsed)
         return increment
+
+    def _stop_reason(self) -> str | None:
+        """The stop request of any rank, agreed on by all (a collective call)."""
+        local = self.stop() if self.stop is not None else None
+        reasons = [r for r in self.problem.comm.allgather(local) if r]
+        return reasons[0] if reasons else None
 
     def _balanced(self, result: SolveResult) -> bool:
         """The optional force-balance criterion, evaluated with every coefficient at the iterate."""
@@ -180,6 +188,10 @@ class SecantSolver:
                 problem.update_state(problem.u, friction_too=(method == "direct"))
                 increment = self._step(result, outer, inner, start)
                 increments.append(increment)
+                stop = self._stop_reason()
+                if stop:
+                    result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
+                    return result
                 if not math.isfinite(increment):
                     result.reason = result.reason or (f"non-finite increment (NaN or Inf) at outer {outer}, inner "
                                                       f"{inner}; try a larger penalty parameter")
