@@ -8,6 +8,7 @@ process); :func:`load_scene` rejects unknown keys, mistyped or non-physical valu
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 import types
@@ -349,7 +350,7 @@ def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, A
     names = [f.name for f in dataclasses.fields(cls)]
     unknown = sorted(set(table) - set(names))
     if unknown:
-        raise SceneError(f"{section}.{unknown[0]}",
+        raise SceneError(f"{section}.{key_name(unknown[0])}",
                          f"unknown key; allowed keys in [{section}]: {', '.join(names)}")
     values = dict(defaults or {})
     for key, value in table.items():
@@ -357,9 +358,14 @@ def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, A
     return cls(**values)
 
 
+def key_name(name: Any) -> str:
+    """A key as it appears in messages: plain names as they are, anything else quoted."""
+    return name if isinstance(name, str) and name.isidentifier() else json.dumps(str(name))
+
+
 def _material(table: dict[str, Any], defaults: dict[str, Any]) -> FlowLaw:
     law = table.get("law", PiecewisePowerLaw.law)
-    if law not in LAWS:
+    if not isinstance(law, str) or law not in LAWS:
         raise SceneError("material.law", f"must be one of {', '.join(LAWS)}; got {law!r}")
     names = {f.name for f in dataclasses.fields(LAWS[law])}
     return _build(LAWS[law], table, "material", {k: v for k, v in defaults.items() if k in names})
@@ -372,7 +378,7 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     """Build and check a scene from a parsed TOML document."""
     unknown = sorted(set(data) - set(SECTIONS))
     if unknown:
-        raise SceneError(unknown[0], f"unknown section; allowed sections: {', '.join(SECTIONS)}")
+        raise SceneError(key_name(unknown[0]), f"unknown section; allowed sections: {', '.join(SECTIONS)}")
     for name in SECTIONS:
         if name in data and not isinstance(data[name], dict):
             raise SceneError(name, f"must be a table ([{name}]); got {data[name]!r}")
@@ -380,7 +386,7 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     if "kind" not in tables["process"]:
         raise SceneError("process.kind", f"missing; must be one of {', '.join(PROCESSES)}")
     kind = tables["process"]["kind"]
-    if kind not in PROCESSES:
+    if not isinstance(kind, str) or kind not in PROCESSES:
         raise SceneError("process.kind", f"must be one of {', '.join(PROCESSES)}; got {kind!r}")
     defaults = PROCESS_DEFAULTS[kind]
     process = _build(Process, tables["process"], "process", defaults.get("process"))
