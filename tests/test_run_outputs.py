@@ -7,9 +7,12 @@ import signal
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
+import pytest
 from mpi4py import MPI
 
+from forming_fenicsx import load_scene
 from forming_fenicsx.cli import main
+from forming_fenicsx.run import solve_scene
 
 DEMO = str(Path(__file__).parents[1] / "demos" / "example1_extrusion.toml")
 COARSE = ["--set", "discretisation.mesh_size=1.0", "--quiet"]
@@ -103,3 +106,25 @@ def test_sigterm_ends_the_run_cleanly_with_the_last_iterate(shared_tmp):
     assert summary["reason"].startswith("interrupted by SIGTERM at outer 0, inner 3")
     assert summary["linear_solves"] == 4  # the uniform start and three secant iterates, all on every rank
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # the handler is restored
+
+
+def test_restart_from_a_previous_run(shared_tmp, capsys):
+    first, second = shared_tmp / "first", shared_tmp / "second"
+    assert main(["run", DEMO, "--out", str(first), *COARSE, "--set", "output.fields=false"]) == 0
+    assert main(["run", DEMO, "--out", str(second), *COARSE, "--set", "output.fields=false",
+                 "--restart", str(first)]) == 0
+    MPI.COMM_WORLD.barrier()
+    a = json.loads((first / "summary.json").read_text())
+    b = json.loads((second / "summary.json").read_text())
+    assert b["restarted_from"] == str(first)
+    assert b["linear_solves"] <= 2 < a["linear_solves"]
+    assert b["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
+    # the restart file does not depend on the partition: restart this rank's own serial solve from it
+    scene = load_scene(DEMO, ["discretisation.mesh_size=1.0"])
+    serial = solve_scene(scene, comm=MPI.COMM_SELF, restart=first)[2]
+    assert serial["linear_solves"] <= 2 and serial["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
+    # another mesh is refused before solving
+    assert main(["run", DEMO, "--out", str(shared_tmp / "other"), "--quiet", "--restart", str(first),
+                 "--set", "discretisation.mesh_size=0.5"]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert "not the same mesh" in capsys.readouterr().err

@@ -51,6 +51,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="override a scene value (repeatable)")
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
+    run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
     mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
     mesh.add_argument("scene", help="scene TOML file")
     mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
@@ -113,8 +114,8 @@ def main(argv: list[str] | None = None) -> int:
     previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem, overwrite=args.force,
-                            stop=stop)
-    except FileExistsError as error:
+                            stop=stop, restart=Path(args.restart) if args.restart else None)
+    except (FileExistsError, FileNotFoundError, ValueError) as error:
         if comm.rank == 0:
             print(f"forming: {error}", file=sys.stderr)
         return 2

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from dolfinx.io import XDMFFile
 
 from .solvers import IterationRecord
@@ -52,3 +53,39 @@ def write_die_profile(path: Path, profile: dict) -> None:
         writer.writerow(names)
         for row in zip(*(profile[name] for name in names), strict=True):
             writer.writerow([f"{value:.8g}" for value in row])
+
+
+def save_velocity(path: Path, u) -> None:
+    """velocity.npz: node coordinates and velocity of every node, gathered on rank 0 (collective).
+
+    Independent of the partition, so a run on any number of ranks can restart from it.
+    """
+    space = u.function_space
+    owned = space.dofmap.index_map.size_local
+    points = space.tabulate_dof_coordinates()[:owned, :2]
+    values = u.x.array.reshape(-1, 2)[:owned]
+    parts = space.mesh.comm.gather((points, values), root=0)
+    if space.mesh.comm.rank == 0:
+        np.savez(path, points=np.concatenate([p for p, _ in parts]), velocity=np.concatenate([v for _, v in parts]))
+
+
+def load_velocity(path: Path, u) -> None:
+    """Set u from a velocity.npz of the same mesh, matching nodes by their coordinates (collective).
+
+    Raises ValueError when the saved mesh differs (another number of nodes or unmatched nodes).
+    """
+    space = u.function_space
+    comm = space.mesh.comm
+    with np.load(path) as saved:
+        points, velocity = saved["points"], saved["velocity"]
+    local = space.tabulate_dof_coordinates()[:, :2]
+    total = comm.allreduce(space.dofmap.index_map.size_local)
+    if len(points) != total:
+        raise ValueError(f"the restart velocity has {len(points)} nodes, this mesh {total}: not the same mesh")
+    scale = max(np.ptp(points, axis=0).max(), 1e-300)
+    keys = {tuple(k): i for i, k in enumerate(np.round(points / scale * 1e9).astype(np.int64))}
+    index = np.array([keys.get(tuple(k), -1) for k in np.round(local / scale * 1e9).astype(np.int64)])
+    if comm.allreduce(int((index < 0).sum())):
+        raise ValueError("the restart velocity's nodes do not match this mesh: not the same mesh")
+    u.x.array[:] = velocity[index].reshape(-1)
+    u.x.scatter_forward()

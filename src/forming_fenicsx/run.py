@@ -13,7 +13,7 @@ from mpi4py import MPI
 
 from .forms import FlowProblem
 from .geometry import build_mesh
-from .output import write_die_profile, write_fields, write_history, write_summary
+from .output import load_velocity, save_velocity, write_die_profile, write_fields, write_history, write_summary
 from .plotting import write_die_plot, write_figures
 from .postprocess import die_profile, force_balance, output_fields, scalars
 from .scene import Scene
@@ -23,14 +23,20 @@ log = logging.getLogger(__name__)
 
 
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
-                stop: Callable[[], str | None] | None = None) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+                stop: Callable[[], str | None] | None = None,
+                restart: Path | None = None) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
-    ``stop`` is polled after every linear solve (see SecantSolver)."""
+    ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
+    folder whose velocity.npz (same mesh) starts the iteration."""
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
+    initial = None
+    if restart is not None:
+        initial = problem.u.copy()
+        load_velocity(Path(restart) / "velocity.npz", initial)
     solver = SecantSolver(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
-    result = solver.solve()
+    result = solver.solve(initial)
     solver.linear.destroy()
     problem.update_state(problem.u, friction_too=True)
     summary = {
@@ -42,6 +48,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "reason": result.reason,
         "linear_solves": result.linear_solves,
         "outer_iterations": result.outer_iterations,
+        "restarted_from": str(restart) if restart is not None else None,
         **scalars(problem),
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
     }
@@ -50,7 +57,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
               comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False,
-              stop: Callable[[], str | None] | None = None) -> dict[str, Any]:
+              stop: Callable[[], str | None] | None = None, restart: Path | None = None) -> dict[str, Any]:
     """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into ``out``.
 
     The files are written into a hidden staging folder beside ``out`` and moved into place only when
@@ -67,7 +74,7 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     staging = Path(comm.bcast(str(staging) if staging else None, root=0))
     try:
-        summary = _solve_and_write(scene, staging, petsc_options, comm, title, stop)
+        summary = _solve_and_write(scene, staging, petsc_options, comm, title, stop, restart)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(staging, ignore_errors=True)
@@ -82,8 +89,9 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
 
 
 def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
-                     title: str, stop: Callable[[], str | None] | None) -> dict[str, Any]:
-    problem, result, summary = solve_scene(scene, petsc_options, comm, stop)
+                     title: str, stop: Callable[[], str | None] | None, restart: Path | None) -> dict[str, Any]:
+    problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
+    save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
     if scene.output.figures:

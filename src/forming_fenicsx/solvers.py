@@ -167,15 +167,21 @@ class SecantSolver:
         return (f"; force balance residual {result.force_balance_checks[-1]:.3e} above "
                 f"solver.force_tolerance {self.settings.force_tolerance:g}")
 
-    def solve(self) -> SolveResult:
-        """Iterate from a uniform modulus until the stopping rule of (4.4) holds."""
+    def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
+        """Iterate until the stopping rule of (4.4) holds, from ``initial`` (a restart: u_{0,0} of the
+        method) or else from the solution with a uniform modulus."""
         problem, settings = self.problem, self.settings
         delta, method = settings.tolerance, settings.method
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
-        problem.set_uniform_secant(problem.scene.reference_strain_rate)
-        if not math.isfinite(self._step(result, 0, 0, start)):
-            return result
+        if initial is not None:
+            petsc_vec(initial).copy(petsc_vec(problem.u))
+            dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
+            problem.u.x.scatter_forward()
+        else:
+            problem.set_uniform_secant(problem.scene.reference_strain_rate)
+            if not math.isfinite(self._step(result, 0, 0, start)):
+                return result
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
         outer_increments: list[float] = []
         for outer in range(outer_limit):
