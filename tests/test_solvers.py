@@ -2,10 +2,14 @@
 method oscillate."""
 import json
 
+import numpy as np
 from mpi4py import MPI
 
 from forming_fenicsx.cli import main
-from forming_fenicsx.solvers import stalled
+from forming_fenicsx.run import solve_scene
+from forming_fenicsx.solvers import LinearSolver, diverging, stalled
+
+from conftest import make_scene
 
 from test_drawing import DEMOS
 
@@ -26,6 +30,48 @@ def test_large_friction_oscillation_stops_with_a_clear_message(shared_tmp, capsy
     assert code == 3
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False
-    assert "oscillates" in summary["reason"] and "not be unique" in summary["reason"]
+    assert ("oscillates" in summary["reason"] or "diverging" in summary["reason"]) and "not be unique" in summary["reason"]
     assert summary["outer_iterations"] < summary["scene"]["solver"]["max_outer_iterations"]
     assert (out / "history.csv").exists()
+
+
+def test_diverging():
+    assert diverging([1.0, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2], run=5, factor=10)
+    assert not diverging([1.0, 0.1, 0.2, 0.4, 0.8, 0.7, 3.2], run=5, factor=10)
+    assert not diverging([0.1, 0.11, 0.12, 0.13, 0.14, 0.15, 0.16], run=5, factor=10)
+
+
+class _Injected:
+    """Replaces LinearSolver.solve: solves, then from the third call on spoils the solution."""
+
+    def __init__(self, monkeypatch, spoil):
+        self.calls, self.spoil = 0, spoil
+        self.original = LinearSolver.solve
+        injected = self
+
+        def solve(linear):
+            injected.original(linear)
+            injected.calls += 1
+            if injected.calls >= 3:
+                spoil(linear.problem.u, injected.calls)
+        monkeypatch.setattr(LinearSolver, "solve", solve)
+
+
+def test_nan_iterate_stops_at_once_and_keeps_the_last_finite_one(monkeypatch):
+    def make_nan(u, call):
+        u.x.array[:] = float("nan")
+    _Injected(monkeypatch, make_nan)
+    problem, result, summary = solve_scene(make_scene(discretisation={"mesh_size": 1.0}))
+    assert not result.converged and result.linear_solves == 3
+    assert "non-finite iterate (NaN or Inf) at outer 0, inner 2" in result.reason
+    assert np.isfinite(problem.u.x.array).all()
+    assert np.isfinite(summary["ram_pressure"])
+
+
+def test_growing_increment_stops_at_once(monkeypatch):
+    def grow(u, call):
+        u.x.array[:] *= 2.0 ** (call * call)
+    _Injected(monkeypatch, grow)
+    result = solve_scene(make_scene(discretisation={"mesh_size": 1.0}))[1]
+    assert not result.converged and result.reason.startswith("diverging")
+    assert result.linear_solves < 12

@@ -77,6 +77,14 @@ def stalled(increments: list[float], window: int) -> bool:
     return min(increments[-window:]) >= min(increments[:-window])
 
 
+def diverging(increments: list[float], run: int = 5, factor: float = 5.0) -> bool:
+    """True when the last ``run`` increments each grew and the last is ``factor`` times the smallest."""
+    if len(increments) <= run:
+        return False
+    tail = increments[-run - 1:]
+    return all(b > a for a, b in zip(tail, tail[1:], strict=False)) and increments[-1] > factor * min(increments)
+
+
 def _recent(increments: list[float], count: int = 6) -> str:
     return ", ".join(f"{value:.2e}" for value in increments[-count:])
 
@@ -116,6 +124,7 @@ class SecantSolver:
         self.settings = settings
         self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
         self._previous = problem.u.copy()
+        self._difference = petsc_vec(problem.u).duplicate()
 
     def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
         """One linear solve from the current state; records and returns the relative increment.
@@ -135,8 +144,13 @@ class SecantSolver:
             return math.nan
         result.linear_solves += 1
         norm = u.norm()
-        previous.axpy(-1.0, u)
-        increment = previous.norm() / norm if norm > 0 else math.inf
+        difference = self._difference
+        previous.copy(difference)
+        difference.axpy(-1.0, u)
+        increment = difference.norm() / norm if norm > 0 else math.inf
+        if not math.isfinite(increment):  # keep the last finite iterate for the results
+            previous.copy(u)
+            self.problem.u.x.scatter_forward()
         record = IterationRecord(outer, inner, increment, time.perf_counter() - start)
         result.history.append(record)
         if self.problem.comm.rank == 0:
@@ -199,12 +213,20 @@ class SecantSolver:
                     result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
                     return result
                 if not math.isfinite(increment):
-                    result.reason = result.reason or (f"non-finite increment (NaN or Inf) at outer {outer}, inner "
-                                                      f"{inner}; try a larger penalty parameter")
+                    result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
+                                                      f"{inner}; the results are the previous iterate. Try a larger "
+                                                      "penalty parameter (penalty.d, penalty.d_N)")
                     return result
+                if diverging(increments):
+                    other = "direct" if method == "modified" else "modified"
+                    result.reason = (f"diverging: the increment grew for 5 iterations to {increment:.3e} (outer "
+                                     f"{outer}, inner {inner}; last increments {_recent(increments)}){friction_note}. "
+                                     f"Try the {other} method, a smaller friction coefficient or larger penalty "
+                                     "parameters; see history.csv")
+                    return result
+                friction_note = "; at this friction coefficient the solution may not be unique" \
+                    if problem.has_friction else ""
                 if stalled(increments, settings.stall_window):
-                    friction_note = "; at this friction coefficient the solution may not be unique" \
-                        if problem.has_friction else ""
                     result.reason = (f"stalled or oscillating: no smaller increment in the last "
                                      f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
                                      f"increments {_recent(increments)}){friction_note}; see history.csv")
