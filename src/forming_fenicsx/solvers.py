@@ -198,6 +198,7 @@ class SecantSolver:
                 return result
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
         outer_increments: list[float] = []
+        friction_note = "; at this friction coefficient the solution may not be unique" if problem.has_friction else ""
         for outer in range(outer_limit):
             result.outer_iterations = outer + 1
             outer_start = problem.u.copy()
@@ -224,8 +225,6 @@ class SecantSolver:
                                      f"Try the {other} method, a smaller friction coefficient or larger penalty "
                                      "parameters; see history.csv")
                     return result
-                friction_note = "; at this friction coefficient the solution may not be unique" \
-                    if problem.has_friction else ""
                 if stalled(increments, settings.stall_window):
                     result.reason = (f"stalled or oscillating: no smaller increment in the last "
                                      f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
