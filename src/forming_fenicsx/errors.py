@@ -9,6 +9,10 @@ class SceneError(ValueError):
         self.key = key
         self.message = message
 
+    def __reduce__(self):
+        """Picklable, so that rank 0's verdict can be broadcast to every rank."""
+        return SceneError, (self.key, self.message)
+
 
 
 class LinearSolveError(RuntimeError):

@@ -15,6 +15,7 @@ import gmsh
 import numpy as np
 from mpi4py import MPI
 
+from .errors import SceneError
 from .scene import Scene
 
 ROLES = {"gamma1_velocity": 1, "gamma2_free": 2, "gamma3_contact": 3,
@@ -197,14 +198,105 @@ def _generate(scene: Scene) -> None:
     gmsh.model.mesh.setOrder(scene.discretisation.degree)
 
 
-def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
-    """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element)."""
-    from dolfinx.io import gmshio
+QUADRILATERALS = {3: "4-node quadrilateral", 10: "9-node quadrilateral"}  # gmsh element types
+REQUIRED_ROLES = ("gamma1_velocity", "gamma3_contact", "gamma6_symmetry")
 
+
+def _quad_jacobians() -> np.ndarray:
+    """Signed Jacobian determinants of the bilinear map of every quadrilateral of the current gmsh
+    model at its four corners and its centre (gmsh's own are unsigned for 2-D cells)."""
+    tags, points, _ = gmsh.model.mesh.getNodes()
+    position = dict(zip(tags.tolist(), range(len(tags)), strict=True))
+    values = []
+    for element_type in QUADRILATERALS:
+        if element_type not in gmsh.model.mesh.getElementTypes(2):
+            continue
+        nodes = gmsh.model.mesh.getElementsByType(element_type)[1].reshape(-1, 4 if element_type == 3 else 9)
+        x = points.reshape(-1, 3)[[[position[n] for n in quad[:4]] for quad in nodes.tolist()]][:, :, :2]
+        following, preceding = np.roll(x, -1, axis=1) - x, np.roll(x, 1, axis=1) - x
+        corners = following[:, :, 0] * preceding[:, :, 1] - following[:, :, 1] * preceding[:, :, 0]
+        d1, d2 = x[:, 2] - x[:, 0], x[:, 3] - x[:, 1]
+        centre = 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+        values.append(np.column_stack([corners, centre]).ravel())
+    return np.concatenate(values)
+
+
+def _check_msh(path: str) -> dict[int, int]:
+    """Open a user's .msh in the current gmsh session and check it; returns file tag -> role tag.
+
+    Raises SceneError (key geometry.mesh_file) for a mesh that is not plane 2-D, has cells other than
+    quadrilaterals, misses a required role, names unknown roles, gives one edge two roles, or has
+    inverted or degenerate elements.
+    """
+    def fail(message: str) -> None:
+        raise SceneError("geometry.mesh_file", f"{path}: {message}")
+
+    try:
+        gmsh.open(path)
+    except Exception as error:
+        fail(f"Gmsh cannot read it ({error})")
+    groups = gmsh.model.getPhysicalGroups()
+    if any(dim == 3 for dim, _ in groups) or len(gmsh.model.mesh.getElementTypes(3)):
+        fail("a 3-D mesh; only plane (2-D) meshes are supported")
+    if not any(dim == 2 for dim, _ in groups):
+        fail("no physical group of dimension 2 (the workpiece's cells)")
+    coordinates = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
+    if np.abs(coordinates[:, 2]).max() > 1e-12 * max(np.ptp(coordinates[:, :2], axis=0).max(), 1e-300):
+        fail("not plane: nodes with z != 0")
+    other = [gmsh.model.mesh.getElementProperties(t)[0] for t in gmsh.model.mesh.getElementTypes(2)
+             if t not in QUADRILATERALS]
+    if other:
+        fail(f"unsupported cells ({', '.join(other)}); use 4- or 9-node quadrilaterals")
+    names = {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in groups if dim == 1}
+    unknown = sorted(name for name in names.values() if name not in ROLES)
+    if unknown:
+        fail(f"unknown boundary role names {unknown}; allowed: {', '.join(ROLES)}")
+    missing = [role for role in REQUIRED_ROLES if role not in names.values()]
+    if missing:
+        fail(f"missing boundary roles {missing} (physical groups of dimension 1 with these names)")
+    owner: dict[tuple[int, int], str] = {}
+    for tag, name in names.items():
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(1, tag):
+            types, _, node_lists = gmsh.model.mesh.getElements(1, entity)
+            for element_type, nodes in zip(types, node_lists, strict=True):
+                per_edge = gmsh.model.mesh.getElementProperties(element_type)[3]
+                for edge in np.asarray(nodes).reshape(-1, per_edge)[:, :2]:
+                    key = tuple(sorted(int(n) for n in edge))
+                    if owner.setdefault(key, name) != name:
+                        fail(f"overlapping roles: an edge belongs to both {owner[key]} and {name}")
+    determinants = _quad_jacobians()
+    largest = np.abs(determinants).max()
+    if determinants.min() * determinants.max() < 0:
+        flipped = int((np.sign(determinants) != np.sign(np.median(determinants))).sum())
+        fail(f"inverted elements: the Jacobian changes sign ({flipped} of the corner and centre points of the cells)")
+    if np.abs(determinants).min() < 1e-10 * largest:
+        fail("degenerate elements: a Jacobian determinant is (nearly) zero")
+    return {tag: ROLES[name] for tag, name in names.items()}
+
+
+def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
+    """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
+    or read and check the scene's own .msh file (geometry.mesh_file)."""
+    from dolfinx.io import gmshio
+    from dolfinx.mesh import meshtags
+
+    mesh_file = scene.geometry.mesh_file
     with _gmsh_session():
+        outcome: dict[int, int] | SceneError | None = None
         if comm.rank == 0:
-            _generate(scene)
+            try:
+                outcome = _check_msh(mesh_file) if mesh_file else None
+                if not mesh_file:
+                    _generate(scene)
+            except SceneError as error:
+                outcome = error
+        outcome = comm.bcast(outcome, root=0)
+        if isinstance(outcome, SceneError):
+            raise outcome
         mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+    if outcome is not None:  # the file's tags -> the roles' tags
+        values = np.array([outcome[int(v)] for v in facet_tags.values], dtype=np.int32)
+        facet_tags = meshtags(mesh, mesh.topology.dim - 1, facet_tags.indices, values)
     present = set(int(v) for v in facet_tags.values)
     present = set().union(*comm.allgather(present))
     roles = {name: tag for name, tag in ROLES.items() if tag in present}
@@ -223,13 +315,33 @@ def write_msh(scene: Scene, path: str | Path) -> Path:
     return path
 
 
+def _chain_coordinate(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Arc length along a polyline of nodes, walked from the upstream end (smallest x, then largest y)
+    to the nearest node not yet visited."""
+    points = np.column_stack([x, y])
+    current = int(np.lexsort((-y, x))[0])
+    s = np.zeros(len(points))
+    visited = np.zeros(len(points), dtype=bool)
+    visited[current] = True
+    for _ in range(len(points) - 1):
+        distance = np.linalg.norm(points - points[current], axis=1)
+        distance[visited] = np.inf
+        following = int(distance.argmin())
+        s[following] = s[current] + distance[following]
+        visited[following] = True
+        current = following
+    return s
+
+
 def die_coordinate(scene: Scene, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Arc length along Gamma3 from where the workpiece meets the die, for points on Gamma3.
 
     Extrusion: along the container wall (from the ram), then down the die face. Drawing: along the
-    cone from the die entry, then along the land.
+    cone from the die entry, then along the land. A user's mesh: along the chain of its Gamma3 nodes.
     """
     g = scene.geometry
+    if g.mesh_file:
+        return _chain_coordinate(x, y)
     if scene.process.kind == "extrusion":
         h0 = 0.5 * g.entry_thickness
         on_face = np.isclose(x, g.die_position) & (y < h0 - 1e-12 * h0)

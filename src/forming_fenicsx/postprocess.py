@@ -125,11 +125,13 @@ def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
 
 
 def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
-    """q_av over the contact part of the die cone (the paper's mean die pressure), contact length and
-    the x where the strip leaves the die (last node of Gamma3 with positive contact pressure)."""
+    """q_av over the contact part of the die cone (the paper's mean die pressure; over all of Gamma3 for
+    a user's mesh), contact length and the x where the strip leaves the die (last node of Gamma3 with
+    positive contact pressure)."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
     start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
-    cone = ufl.conditional(ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    cone = 1.0 if g.mesh_file else ufl.conditional(
+        ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     touching = in_contact(problem)
     ds = problem.ds_contact
     cone_contact = _integrate(problem, touching * cone * ds)

@@ -48,7 +48,11 @@ class Process:
 
 
 def _check_strip(geometry, positive: tuple[str, ...]) -> None:
-    """Lengths finite and > 0, and a die that reduces the thickness."""
+    """Lengths finite and > 0, a die that reduces the thickness, an existing .msh file if one is named."""
+    if geometry.mesh_file is not None:
+        path = Path(geometry.mesh_file)
+        if path.suffix != ".msh" or not path.is_file():
+            raise SceneError("geometry.mesh_file", f"must name an existing Gmsh .msh file; got {geometry.mesh_file!r}")
     for key in positive:
         value = getattr(geometry, key)
         if not (math.isfinite(value) and value > 0):
@@ -60,9 +64,14 @@ def _check_strip(geometry, positive: tuple[str, ...]) -> None:
 
 
 class _Strip:
-    """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares."""
+    """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares.
+
+    ``mesh_file`` names a Gmsh .msh file to use instead of the built-in geometry; its boundary roles
+    are the physical groups named gamma1_velocity ... gamma6_symmetry (as `forming mesh` writes them).
+    """
 
     exit_thickness: float
+    mesh_file: str | None
 
     @property
     def thinnest(self) -> float:
@@ -78,6 +87,7 @@ class ExtrusionGeometry(_Strip):
     entry_thickness: float = 10.0
     exit_thickness: float = 5.0
     die_position: float = 10.0
+    mesh_file: str | None = None
 
     def check(self) -> None:
         _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_position"))
@@ -100,6 +110,7 @@ class DrawingGeometry(_Strip):
     die_angle: float = 6.0
     land_length: float = 0.15
     die_entry: float = 3.0
+    mesh_file: str | None = None
 
     def check(self) -> None:
         _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_entry"))
@@ -438,4 +449,8 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
         raise SceneError(str(path), "scene file not found") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SceneError(str(path), f"not valid TOML: {exc}") from None
-    return scene_from_dict(apply_overrides(data, overrides or []))
+    data = apply_overrides(data, overrides or [])
+    geometry = data.get("geometry")
+    if isinstance(geometry, dict) and isinstance(geometry.get("mesh_file"), str):
+        geometry["mesh_file"] = str(path.parent / geometry["mesh_file"])  # relative to the scene file
+    return scene_from_dict(data)
