@@ -66,4 +66,5 @@ def test_random_scenes(data):
 def test_both_outcomes_were_exercised():
     """Runs after the two property tests (file order): both paths must have been taken many times."""
     print(f"\ngenerated scenes: {dict(outcomes)}")
-    assert outcomes["accepted"] > 100 and outcomes["rejected"] > 1000
+    # measured: 191 accepted of 4000 with hypothesis 6.67 (Debian 12), 88 with 6.130 (Debian 13)
+    assert outcomes["accepted"] > 40 and outcomes["rejected"] > 1000
