@@ -128,3 +128,15 @@ def test_restart_from_a_previous_run(shared_tmp, capsys):
                  "--set", "discretisation.mesh_size=0.5"]) == 2
     if MPI.COMM_WORLD.rank == 0:
         assert "not the same mesh" in capsys.readouterr().err
+
+
+def test_zero_pivot_stops_with_reason(shared_tmp):
+    """PETSc's own LU told that every pivot is zero (on 2 ranks it refuses the parallel matrix): either
+    way the run ends at the first solve with the reason, not a traceback."""
+    out = shared_tmp / "pivot"
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-pc_type", "lu", "-pc_factor_mat_solver_type",
+                 "petsc", "-pc_factor_zeropivot", "1e300"]) == 3
+    MPI.COMM_WORLD.barrier()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["converged"] is False and summary["linear_solves"] == 0
+    assert "linear solve failed at outer 0, inner 0" in summary["reason"]
