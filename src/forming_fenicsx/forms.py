@@ -63,6 +63,11 @@ class FlowProblem:
         self.secant = dolfinx.fem.Function(averaging_space, name="secant_viscosity")
         self._rate_projector = LumpedProjector(equivalent_strain_rate(self.u_state), self.strain_rate,
                                                self.full_degree)
+        # "quadrature": G evaluated at the integration points of the state; ``secant`` then holds its
+        # nodal means for output only.
+        self.quadrature_secant = (scene.material.secant_ufl(equivalent_strain_rate(self.u_state))
+                                  if scene.discretisation.averaging == "quadrature" else None)
+        self._uniform = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
 
         self.has_contact = "gamma3_contact" in self.roles
         self.has_friction = self.has_contact and scene.friction.mu > 0
@@ -85,9 +90,15 @@ class FlowProblem:
         self.residual = dolfinx.fem.form(residual)
 
     # -- terms of b(w; u, v) and f(v) ---------------------------------------------------------
+    def secant_coefficient(self):
+        """G(w) = sigma_p/rate of a(w; u, v): the averaged Function, or the quadrature-point expression."""
+        if self.quadrature_secant is None:
+            return self.secant
+        return ufl.conditional(ufl.gt(self._uniform, 0.0), self._uniform, self.quadrature_secant)
+
     def viscous_form(self, u, v):
-        """a(w; u, v) of (3.2) with the secant coefficient G(w) = sigma_p/rate held in ``secant``."""
-        return 2.0 / 3.0 * self.secant * deviatoric_product(strain_rate(u), strain_rate(v)) * self.dx
+        """a(w; u, v) of (3.2) with the secant coefficient G(w) = sigma_p/rate."""
+        return 2.0 / 3.0 * self.secant_coefficient() * deviatoric_product(strain_rate(u), strain_rate(v)) * self.dx
 
     def volumetric_form(self, u, v):
         """Penalty incompressibility (1/d) int div u div v of (3.5), complete or reduced Gauss."""
@@ -96,7 +107,8 @@ class FlowProblem:
     def stress(self):
         """In-plane Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4) and sigma_H = div(u)/d (3.4)."""
         e = strain_rate(self.u)
-        return 2.0 / 3.0 * self.secant * deviatoric(e) + ufl.div(self.u) / self.scene.penalty.d * ufl.Identity(2)
+        return (2.0 / 3.0 * self.secant_coefficient() * deviatoric(e)
+                + ufl.div(self.u) / self.scene.penalty.d * ufl.Identity(2))
 
     @property
     def ds_contact(self):
@@ -144,7 +156,9 @@ class FlowProblem:
     # -- secant state ---------------------------------------------------------------------------
     def set_uniform_secant(self, rate: float) -> None:
         """A uniform modulus G(rate), the start of both secant methods (u_0 carries no strain rate)."""
-        self.secant.x.array[:] = self.scene.material.secant(np.array([rate]))[0]
+        value = self.scene.material.secant(np.array([rate]))[0]
+        self.secant.x.array[:] = value
+        self._uniform.value = value if self.quadrature_secant is not None else 0.0
 
     def update_state(self, u: dolfinx.fem.Function, friction_too: bool) -> None:
         """Take G, the contact set and the slip regularisation from u (and tau_f too if asked)."""
@@ -153,6 +167,7 @@ class FlowProblem:
         self.u_state.x.scatter_forward()
         self._rate_projector.project()
         self.secant.x.array[:] = self.scene.material.secant(self.strain_rate.x.array)
+        self._uniform.value = 0.0
         if friction_too:
             self.freeze_friction(u)
 

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import ufl
 
 from .errors import SceneError
 
@@ -46,6 +47,11 @@ class PiecewisePowerLaw:
         clipped = np.clip(np.asarray(rate, dtype=float), self.rate1, self.rate2)
         return self.A * clipped ** (self.alpha - 1.0)
 
+    def secant_ufl(self, rate):
+        """G(rate) of (4.5) as a UFL expression, for evaluation at quadrature points."""
+        clipped = ufl.min_value(ufl.max_value(rate, self.rate1), self.rate2)
+        return self.A * clipped ** (self.alpha - 1.0)
+
 
 @dataclass(frozen=True)
 class PowerLaw:
@@ -77,6 +83,10 @@ class PowerLaw:
     def secant(self, rate: np.ndarray) -> np.ndarray:
         """G(rate) = sigma_p/rate = A*max(rate, rate_floor)**(n-1)."""
         return self.A * np.maximum(np.asarray(rate, dtype=float), self.rate_floor) ** (self.n - 1.0)
+
+    def secant_ufl(self, rate):
+        """G(rate) as a UFL expression, for evaluation at quadrature points."""
+        return self.A * ufl.max_value(rate, self.rate_floor) ** (self.n - 1.0)
 
 
 LAWS = {"piecewise_power": PiecewisePowerLaw, "power": PowerLaw}

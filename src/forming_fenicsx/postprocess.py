@@ -208,7 +208,7 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     sources = {
         "equivalent_strain_rate": (equivalent_strain_rate(problem.u), problem.full_degree),
         "hydrostatic_pressure": (hydrostatic_pressure(problem), problem.volumetric_degree),
-        "secant_viscosity": (problem.secant, problem.full_degree),
+        "secant_viscosity": (problem.secant_coefficient(), problem.full_degree),
     }
     fields = [velocity]
     for name, (expr, quadrature) in sources.items():

@@ -189,7 +189,7 @@ class Discretisation:
 
     def check(self) -> None:
         choices = {"element": ("Q1", "Q2"), "volumetric_integration": ("reduced", "complete"),
-                   "averaging": ("nodes", "centres")}
+                   "averaging": ("nodes", "centres", "quadrature")}
         for key, allowed in choices.items():
             if getattr(self, key) not in allowed:
                 raise SceneError(f"discretisation.{key}",
