@@ -22,7 +22,7 @@ parser.add_argument("--scene", default=str(Path(__file__).with_name("example1_ex
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.5, 0.25, 0.125, 0.0625])
 parser.add_argument("--grading", type=float, default=8.0)
 parser.add_argument("--penalties", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4, 1e-5, 1e-6])
-PARTS = ["mesh", "penalty", "methods", "tolerance", "elements"]
+PARTS = ["mesh", "penalty", "methods", "tolerance", "elements", "regularisation"]
 parser.add_argument("--parts", nargs="+", default=PARTS, choices=PARTS)
 parser.add_argument("--out", default="results/example1_study")
 args = parser.parse_args()
@@ -105,6 +105,13 @@ table("Elements, volumetric quadrature and averaging (mu = 0, h = 0.25, grading 
       ["element", "volumetric", "averaging", "dofs", "ram pressure", "error vs Hill", "linear solves"],
       [[r["element"], r["volumetric_integration"], r["averaging"], r["dofs"], r["ram_pressure"],
         f"{100 * (r['ram_pressure'] / HILL - 1):+.2f}%", r["linear_solves"]] for r in results["elements"]])
+
+# ## 6. The friction regularisation d_T -> 0 (mu = 0.1, h = 0.5, direct method)
+for d_T in (1e-1, 1e-2, 1e-3, 1e-4, 1e-6) if "regularisation" in args.parts else []:
+    s = run("discretisation.mesh_size=0.5", grading, "friction.mu=0.1", "solver.method=direct", f"friction.d_T={d_T}")
+    results["regularisation"].append({"d_T": d_T, **s})
+table("Friction regularisation (mu = 0.1, h = 0.5)", ["d_T", "ram pressure", "die friction force x", "linear solves"],
+      [[r["d_T"], r["ram_pressure"], r["die_friction_force_x"], r["linear_solves"]] for r in results["regularisation"]])
 
 if rank0:
     out = Path(args.out)
