@@ -52,6 +52,14 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
     run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
+    study = sub.add_parser("study", help="run a grid of variations of a scene; errors, costs, Pareto plot")
+    study.add_argument("scene", help="scene TOML file")
+    study.add_argument("--vary", action="append", required=True, metavar="SECTION.KEY=V1,V2,...",
+                       help="a key and its values (repeatable; the grid is every combination)")
+    study.add_argument("--out", help="output folder (default: results/<scene name>_study)")
+    study.add_argument("--quantity", help="summary key to measure (default: ram_pressure or mean_die_pressure)")
+    study.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    study.add_argument("--quiet", action="store_true", help="log warnings only")
     mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
     mesh.add_argument("scene", help="scene TOML file")
     mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
@@ -81,12 +89,22 @@ def main(argv: list[str] | None = None) -> int:
 
     from mpi4py import MPI
 
-    from .scene import load_scene
+    from .scene import load_scene, read_scene_data
 
     comm = MPI.COMM_WORLD
     try:
         scene = load_scene(args.scene, args.set)
         petsc_options = petsc_options_from_args(petsc_args)
+        if args.command == "study":
+            from .study import run_study
+
+            configure_logging(args.quiet, comm.rank)
+            logging.getLogger("forming_fenicsx.solvers").setLevel(logging.WARNING)  # one progress line per run
+            out = Path(args.out) if args.out else Path("results") / f"{Path(args.scene).stem}_study"
+            rows = run_study(read_scene_data(args.scene, args.set), args.vary, out, args.quantity, comm)
+            if comm.rank == 0:
+                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; {out}/study.csv")
+            return 0
     except SceneError as error:
         if comm.rank == 0:
             print(f"forming: invalid scene {args.scene}: {error}", file=sys.stderr)

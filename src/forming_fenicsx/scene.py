@@ -440,8 +440,9 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
     return data
 
 
-def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
-    """Read, override and validate a scene file."""
+def read_scene_data(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
+    """Read a scene file and apply overrides, without validating; a relative mesh_file is taken
+    relative to the scene file."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())
@@ -453,4 +454,9 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
     geometry = data.get("geometry")
     if isinstance(geometry, dict) and isinstance(geometry.get("mesh_file"), str):
         geometry["mesh_file"] = str(path.parent / geometry["mesh_file"])  # relative to the scene file
-    return scene_from_dict(data)
+    return data
+
+
+def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
+    """Read, override and validate a scene file."""
+    return scene_from_dict(read_scene_data(path, overrides))

@@ -1,0 +1,145 @@
+"""`forming study`: a grid of runs of one scene over varied keys, each with its error and its cost.
+
+The error of each run's quantity (ram pressure for extrusion, q_av for drawing, or --quantity) is taken
+against the exact value where one is known (Hill's ram pressure for frictionless Example 1 geometry
+at reduction 1/2), otherwise against a Richardson extrapolation from the three finest mesh sizes of
+the same other settings; `reference_kind` says which. A study stopped and started again skips the runs
+its study.json already holds.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import logging
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from .errors import SceneError
+from .report import richardson
+from .run import solve_scene
+from .scene import apply_overrides, parse_override, scene_from_dict
+
+log = logging.getLogger(__name__)
+QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
+
+
+def parse_vary(texts: list[str]) -> list[tuple[str, list[str]]]:
+    """``section.key=v1,v2,...`` -> (key, [override strings])."""
+    grid = []
+    for text in texts:
+        keys, _ = parse_override(text)
+        path = ".".join(keys)
+        values = text.split("=", 1)[1].split(",")
+        if not all(v.strip() for v in values):
+            raise SceneError(path, "--vary needs a comma-separated list of values")
+        grid.append((path, [f"{path}={v.strip()}" for v in values]))
+    return grid
+
+
+def exact_value(scene, quantity: str) -> float | None:
+    """Hill's slip-line ram pressure (1 + pi/2) k for frictionless square-die extrusion at reduction 1/2."""
+    if (scene.process.kind == "extrusion" and quantity == "ram_pressure" and scene.friction.mu == 0
+            and scene.process.applied_force is None and scene.geometry.mesh_file is None
+            and math.isclose(scene.geometry.exit_thickness, 0.5 * scene.geometry.entry_thickness)):
+        k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
+        return (1 + math.pi / 2) * k
+    return None
+
+
+def references(rows: list[dict[str, Any]], quantity: str) -> None:
+    """Add reference, reference_kind and relative_error to every row (in place)."""
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        others = {k: v for k, v in row["settings"].items() if k != "discretisation.mesh_size"}
+        groups.setdefault(json.dumps(others, sort_keys=True), []).append(row)
+    for group in groups.values():
+        ranked = sorted((r for r in group if r["converged"]),
+                        key=lambda r: -float(r["settings"].get("discretisation.mesh_size", math.inf)))
+        limit = richardson([r[quantity] for r in ranked])[0] if len(ranked) >= 3 else math.nan
+        for row in group:
+            if row.get("exact") is not None:
+                row["reference"], row["reference_kind"] = row["exact"], "exact"
+            elif math.isfinite(limit):
+                row["reference"], row["reference_kind"] = limit, "richardson (three finest mesh sizes)"
+            else:
+                row["reference"], row["reference_kind"] = math.nan, "none"
+            row["relative_error"] = abs(row[quantity] / row["reference"] - 1) if math.isfinite(row["reference"]) \
+                else math.nan
+
+
+def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | None = None,
+              comm: MPI.Comm = MPI.COMM_WORLD) -> list[dict[str, Any]]:
+    """Run every combination of the varied values (skipping those already in out/study.json)."""
+    grid = parse_vary(vary)
+    combinations = list(itertools.product(*[values for _, values in grid]))
+    base = scene_from_dict(json.loads(json.dumps(data)))  # validates the unvaried scene first
+    quantity = quantity or QUANTITIES[base.process.kind]
+    scenes = [scene_from_dict(apply_overrides(json.loads(json.dumps(data)), list(c))) for c in combinations]
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    store = out / "study.json"
+    done = json.loads(store.read_text())["runs"] if comm.rank == 0 and store.exists() else []
+    done = comm.bcast(done, root=0)
+    rows = {json.dumps(r["settings"], sort_keys=True): r for r in done}
+    start = time.perf_counter()
+    for index, (combination, scene) in enumerate(zip(combinations, scenes, strict=True), start=1):
+        settings = dict(override.split("=", 1) for override in combination)
+        key = json.dumps(settings, sort_keys=True)
+        if key not in rows:
+            summary = solve_scene(scene, comm=comm)[2]
+            rows[key] = {"settings": settings, "exact": exact_value(scene, quantity),
+                         **{k: v for k, v in summary.items() if k != "scene"}}
+            if comm.rank == 0:
+                store.write_text(json.dumps({"quantity": quantity, "runs": list(rows.values())}, indent=1))
+        elapsed = time.perf_counter() - start
+        if comm.rank == 0:
+            log.info("run %d of %d done, %.0f s elapsed, about %.0f s left", index, len(combinations), elapsed,
+                     elapsed / index * (len(combinations) - index))
+    ordered = [rows[json.dumps(dict(o.split("=", 1) for o in c), sort_keys=True)] for c in combinations]
+    references(ordered, quantity)
+    if comm.rank == 0:
+        store.write_text(json.dumps({"quantity": quantity, "runs": ordered}, indent=1, default=str))
+        _write_csv(out / "study.csv", ordered, quantity, [k for k, _ in grid])
+        _pareto_plot(out / "pareto.png", ordered, quantity, [k for k, _ in grid])
+    return ordered
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]], quantity: str, keys: list[str]) -> None:
+    import csv
+
+    columns = [*keys, quantity, "reference", "reference_kind", "relative_error", "converged", "wall_time_s",
+               "linear_solves", "dofs"]
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(columns)
+        for row in rows:
+            writer.writerow([row["settings"].get(k) for k in keys] + [row.get(c) for c in columns[len(keys):]])
+
+
+def _pareto_plot(path: Path, rows: list[dict[str, Any]], quantity: str, keys: list[str]) -> None:
+    """Wall time against relative error, log-log, one marker per setting of the varied keys but the mesh."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    series: dict[str, list[tuple[float, float]]] = {}
+    for row in rows:
+        label = ", ".join(f"{k}={row['settings'][k]}" for k in keys if k != "discretisation.mesh_size") or quantity
+        if math.isfinite(row["relative_error"]) and row["relative_error"] > 0:
+            series.setdefault(label, []).append((row["wall_time_s"], row["relative_error"]))
+    for marker, (label, points) in zip(itertools.cycle("osD^v<>p*"), series.items()):
+        ax.loglog(*zip(*sorted(points), strict=True), marker=marker, label=label)
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel(f"relative error of {quantity}")
+    ax.grid(True, which="both", alpha=0.3)
+    if series:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
