@@ -56,18 +56,20 @@ class FlowProblem:
                               metadata={"quadrature_degree": self.full_degree})
         self.n = ufl.FacetNormal(mesh)
 
-        # Vertex nodes with bilinear interpolation keep G > 0 everywhere; Q2 nodal values would not.
-        averaging_space = (function_space(mesh, "DP", 0) if scene.discretisation.averaging == "centres"
-                           else function_space(mesh, "P", 1))
-        self.strain_rate = dolfinx.fem.Function(averaging_space, name="equivalent_strain_rate")
-        self.secant = dolfinx.fem.Function(averaging_space, name="secant_viscosity")
-        self._rate_projector = LumpedProjector(equivalent_strain_rate(self.u_state), self.strain_rate,
-                                               self.full_degree)
-        # "quadrature": G evaluated at the integration points of the state; ``secant`` then holds its
-        # nodal means for output only.
-        self.quadrature_secant = (scene.material.secant_ufl(equivalent_strain_rate(self.u_state))
-                                  if scene.discretisation.averaging == "quadrature" else None)
+        # "quadrature": G evaluated at the integration points of the state, a UFL expression; else G is a
+        # Function of element means ("centres") or vertex means ("nodes": bilinear in between keeps G > 0
+        # everywhere; Q2 nodal values would not), updated from the projected equivalent strain rate.
         self._uniform = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
+        self.quadrature_secant = None
+        if scene.discretisation.averaging == "quadrature":
+            self.quadrature_secant = scene.material.secant_ufl(equivalent_strain_rate(self.u_state))
+        else:
+            averaging_space = (function_space(mesh, "DP", 0) if scene.discretisation.averaging == "centres"
+                               else function_space(mesh, "P", 1))
+            self.strain_rate = dolfinx.fem.Function(averaging_space, name="equivalent_strain_rate")
+            self.secant = dolfinx.fem.Function(averaging_space, name="secant_viscosity")
+            self._rate_projector = LumpedProjector(equivalent_strain_rate(self.u_state), self.strain_rate,
+                                                   self.full_degree)
 
         self.has_contact = "gamma3_contact" in self.roles
         self.has_friction = self.has_contact and scene.friction.mu > 0
@@ -157,17 +159,21 @@ class FlowProblem:
     def set_uniform_secant(self, rate: float) -> None:
         """A uniform modulus G(rate), the start of both secant methods (u_0 carries no strain rate)."""
         value = self.scene.material.secant(np.array([rate]))[0]
-        self.secant.x.array[:] = value
-        self._uniform.value = value if self.quadrature_secant is not None else 0.0
+        if self.quadrature_secant is None:
+            self.secant.x.array[:] = value
+        else:
+            self._uniform.value = value
 
     def update_state(self, u: dolfinx.fem.Function, friction_too: bool) -> None:
         """Take G, the contact set and the slip regularisation from u (and tau_f too if asked)."""
         u.x.scatter_forward()
         petsc_vec(u).copy(petsc_vec(self.u_state))
         self.u_state.x.scatter_forward()
-        self._rate_projector.project()
-        self.secant.x.array[:] = self.scene.material.secant(self.strain_rate.x.array)
-        self._uniform.value = 0.0
+        if self.quadrature_secant is None:
+            self._rate_projector.project()
+            self.secant.x.array[:] = self.scene.material.secant(self.strain_rate.x.array)
+        else:
+            self._uniform.value = 0.0
         if friction_too:
             self.freeze_friction(u)
 
