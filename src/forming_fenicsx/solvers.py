@@ -124,6 +124,7 @@ class SecantSolver:
         self.settings = settings
         self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
         self._previous = problem.u.copy()
+        self._state_is_current = False
         self._difference = petsc_vec(problem.u).duplicate()
 
     def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
@@ -169,6 +170,7 @@ class SecantSolver:
         if tolerance == 0 or self.balance is None:
             return True
         self.problem.update_state(self.problem.u, friction_too=True)
+        self._state_is_current = True  # the next inner iterate needs no update of its own
         residual = self.balance()
         result.force_balance_checks.append(residual)
         if self.problem.comm.rank == 0:
@@ -206,7 +208,9 @@ class SecantSolver:
                 problem.freeze_friction(problem.u)
             increments: list[float] = []
             for inner in range(1, settings.max_iterations + 1):
-                problem.update_state(problem.u, friction_too=(method == "direct"))
+                if not self._state_is_current:
+                    problem.update_state(problem.u, friction_too=(method == "direct"))
+                self._state_is_current = False
                 increment = self._step(result, outer, inner, start)
                 increments.append(increment)
                 stop = self._stop_reason()
