@@ -3,6 +3,7 @@ method oscillate."""
 import json
 
 import numpy as np
+import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.cli import main
@@ -55,6 +56,8 @@ class _Injected:
             if injected.calls >= 3:
                 spoil(linear.problem.u, injected.calls)
         monkeypatch.setattr(LinearSolver, "solve", solve)
+        # a spoiled iterate is no solution of its system: keep the ill-conditioning check out of these tests
+        monkeypatch.setattr(LinearSolver, "error_estimate", lambda linear: 0.0)
 
 
 def test_nan_iterate_stops_at_once_and_keeps_the_last_finite_one(monkeypatch):
@@ -75,3 +78,17 @@ def test_growing_increment_stops_at_once(monkeypatch):
     result = solve_scene(make_scene(discretisation={"mesh_size": 1.0}))[1]
     assert not result.converged and result.reason.startswith("diverging")
     assert result.linear_solves < 12
+
+
+def test_ill_conditioned_penalty_stops_with_a_clear_message():
+    """d = 1e-12 makes K so stiff that the estimated error of a linear solve exceeds delta (measured
+    1.2e-3 on this mesh): the run says so after two solves instead of stalling; d = 1e-8 converges with
+    a small estimate (3e-8) and the same ram pressure as d = 1e-6."""
+    stiff = solve_scene(make_scene(penalty={"d": 1e-12}, discretisation={"mesh_size": 0.5}))
+    assert not stiff[1].converged and stiff[1].linear_solves <= 3
+    assert stiff[1].reason.startswith("ill-conditioned linear systems") and "penalty.d = 1e-12" in stiff[1].reason
+    assert stiff[2]["solve_error_estimate"] > 1e-4
+    fine, reference = (solve_scene(make_scene(penalty={"d": d}, discretisation={"mesh_size": 0.5}))[2]
+                       for d in (1e-8, 1e-6))
+    assert fine["converged"] and 1e-10 < fine["solve_error_estimate"] < 1e-6
+    assert fine["ram_pressure"] == pytest.approx(reference["ram_pressure"], rel=1e-5)

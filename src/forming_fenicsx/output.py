@@ -32,9 +32,10 @@ def write_history(path: Path, history: list[IterationRecord]) -> None:
     """history.csv: a row per linear solve."""
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow(["outer", "inner", "relative_increment", "elapsed_s"])
+        writer.writerow(["outer", "inner", "relative_increment", "elapsed_s", "solve_error_estimate"])
         for record in history:
-            writer.writerow([record.outer, record.inner, f"{record.increment:.6e}", f"{record.elapsed:.4f}"])
+            writer.writerow([record.outer, record.inner, f"{record.increment:.6e}", f"{record.elapsed:.4f}",
+                             f"{record.solve_error:.3e}"])
 
 
 def write_fields(path: Path, mesh, fields) -> None:

@@ -48,6 +48,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "reason": result.reason,
         "linear_solves": result.linear_solves,
         "outer_iterations": result.outer_iterations,
+        "solve_error_estimate": result.solve_error,
         "restarted_from": str(restart) if restart is not None else None,
         **scalars(problem),
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),

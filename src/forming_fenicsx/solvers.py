@@ -22,6 +22,7 @@ from .forms import FlowProblem
 
 log = logging.getLogger(__name__)
 _prefixes = itertools.count()
+ILL_CONDITIONED = 0.01  # warn when a linear solve's estimated error reaches this fraction of delta
 
 
 class LinearSolver:
@@ -41,6 +42,8 @@ class LinearSolver:
         self.A.setOptionsPrefix(prefix)
         self.A.setFromOptions()
         self.ksp.setOperators(self.A)
+        self._residual = self.b.duplicate()
+        self._correction = self.b.duplicate()
 
     def solve(self) -> None:
         """Assemble K and F at the problem's current state and solve into problem.u."""
@@ -64,10 +67,22 @@ class LinearSolver:
             raise LinearSolveError(f"KSP diverged (reason {reason})")
         problem.u.x.scatter_forward()
 
+    def error_estimate(self) -> float:
+        """Relative forward error of the last solve, ||A^-1 (b - A x)|| / ||x||: one step of iterative
+        refinement with the factors already computed (a matrix-vector product and a pair of triangular
+        solves, no new factorisation). A backward-stable LU leaves a residual of rounding size, so the
+        estimate is about the condition number of K times the machine precision: it shows when a small
+        penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear systems ill-conditioned."""
+        x = petsc_vec(self.problem.u)
+        self.A.mult(x, self._residual)
+        self._residual.aypx(-1.0, self.b)
+        self.ksp.solve(self._residual, self._correction)
+        norm = x.norm()
+        return self._correction.norm() / norm if norm > 0 else 0.0
+
     def destroy(self) -> None:
-        self.ksp.destroy()
-        self.A.destroy()
-        self.b.destroy()
+        for item in (self.ksp, self.A, self.b, self._residual, self._correction):
+            item.destroy()
 
 
 def stalled(increments: list[float], window: int) -> bool:
@@ -91,12 +106,14 @@ def _recent(increments: list[float], count: int = 6) -> str:
 
 @dataclass
 class IterationRecord:
-    """One linear solve: outer index m, inner index n, relative increment, elapsed seconds."""
+    """One linear solve: outer index m, inner index n, relative increment, elapsed seconds, and the
+    estimated relative error of the linear solve itself (LinearSolver.error_estimate)."""
 
     outer: int
     inner: int
     increment: float
     elapsed: float
+    solve_error: float = 0.0
 
 
 @dataclass
@@ -107,6 +124,11 @@ class SolveResult:
     outer_iterations: int = 0
     history: list[IterationRecord] = field(default_factory=list)
     force_balance_checks: list[float] = field(default_factory=list)
+
+    @property
+    def solve_error(self) -> float:
+        """The largest estimated relative error of a linear solve in the run."""
+        return max((r.solve_error for r in self.history), default=0.0)
 
 
 class SecantSolver:
@@ -126,6 +148,7 @@ class SecantSolver:
         self._previous = problem.u.copy()
         self._state_is_current = False
         self._difference = petsc_vec(problem.u).duplicate()
+        self._warned = False
 
     def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
         """One linear solve from the current state; records and returns the relative increment.
@@ -144,6 +167,7 @@ class SecantSolver:
                              "friction.d_T, or the default MUMPS LU solver")
             return math.nan
         result.linear_solves += 1
+        solve_error = self.linear.error_estimate()
         norm = u.norm()
         difference = self._difference
         previous.copy(difference)
@@ -152,11 +176,21 @@ class SecantSolver:
         if not math.isfinite(increment):  # keep the last finite iterate for the results
             previous.copy(u)
             self.problem.u.x.scatter_forward()
-        record = IterationRecord(outer, inner, increment, time.perf_counter() - start)
+        record = IterationRecord(outer, inner, increment, time.perf_counter() - start, solve_error)
         result.history.append(record)
         if self.problem.comm.rank == 0:
             log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment, record.elapsed)
+        if solve_error > ILL_CONDITIONED * self.settings.tolerance and not self._warned:
+            self._warned = True
+            if self.problem.comm.rank == 0:
+                log.warning("the linear systems are ill-conditioned: estimated relative error of a solve %.1e, "
+                            "above 1%% of delta %g; %s", solve_error, self.settings.tolerance, self._penalties())
         return increment
+
+    def _penalties(self) -> str:
+        scene = self.problem.scene
+        return (f"the penalties make K stiff (penalty.d = {scene.penalty.d:g}, penalty.d_N = {scene.penalty.d_N:g}, "
+                f"friction.d_T = {scene.friction.d_T:g}); use larger ones")
 
     def _stop_reason(self) -> str | None:
         """The stop request of any rank, agreed on by all (a collective call)."""
@@ -216,6 +250,13 @@ class SecantSolver:
                 stop = self._stop_reason()
                 if stop:
                     result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
+                    return result
+                solve_error = result.history[-1].solve_error if result.history else 0.0
+                if math.isfinite(increment) and solve_error > settings.tolerance:
+                    result.reason = (f"ill-conditioned linear systems: the estimated relative error of the linear "
+                                     f"solve, {solve_error:.2e} (one step of iterative refinement), is above "
+                                     f"delta {delta:g} at outer {outer}, inner {inner}, so the increment cannot "
+                                     f"reliably fall below delta; {self._penalties()}")
                     return result
                 if not math.isfinite(increment):
                     result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
