@@ -41,6 +41,16 @@ def _is_number(text: str) -> bool:
     return True
 
 
+def _is_study(path: str) -> bool:
+    """A study file has a [study] table (scene files have none)."""
+    import tomllib
+
+    try:
+        return "study" in tomllib.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return False
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="forming", description="Steady-state metal forming (Angelov 2014).")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -53,8 +63,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
     run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
     study = sub.add_parser("study", help="run a grid of variations of a scene; errors, costs, Pareto plot")
-    study.add_argument("scene", help="scene TOML file")
-    study.add_argument("--vary", action="append", required=True, metavar="SECTION.KEY=V1,V2,...",
+    study.add_argument("scene", help="scene TOML file, or a study file (a [study] table: scene, vary, set, quantity)")
+    study.add_argument("--vary", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
                        help="a key and its values (repeatable; the grid is every combination)")
     study.add_argument("--out", help="output folder (default: results/<scene name>_study)")
     study.add_argument("--quantity", help="summary key to measure (default: ram_pressure or mean_die_pressure)")
@@ -93,18 +103,23 @@ def main(argv: list[str] | None = None) -> int:
 
     comm = MPI.COMM_WORLD
     try:
-        scene = load_scene(args.scene, args.set)
-        petsc_options = petsc_options_from_args(petsc_args)
         if args.command == "study":
-            from .study import run_study
+            from .study import load_study, run_study
 
             configure_logging(args.quiet, comm.rank)
             logging.getLogger("forming_fenicsx.solvers").setLevel(logging.WARNING)  # one progress line per run
-            out = Path(args.out) if args.out else Path("results") / f"{Path(args.scene).stem}_study"
-            rows = run_study(read_scene_data(args.scene, args.set), args.vary, out, args.quantity, comm)
+            data, vary, quantity = load_study(args.scene, args.set) if _is_study(args.scene) else \
+                (read_scene_data(args.scene, args.set), [], None)
+            if not vary + args.vary:
+                raise SceneError("--vary", "a study needs at least one --vary (or a study file)")
+            stem = Path(args.scene).name.split(".")[0]
+            out = Path(args.out) if args.out else Path("results") / (stem if _is_study(args.scene) else f"{stem}_study")
+            rows = run_study(data, vary + args.vary, out, args.quantity or quantity, comm)
             if comm.rank == 0:
                 print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; {out}/study.csv")
             return 0
+        scene = load_scene(args.scene, args.set)
+        petsc_options = petsc_options_from_args(petsc_args)
     except SceneError as error:
         if comm.rank == 0:
             print(f"forming: invalid scene {args.scene}: {error}", file=sys.stderr)

@@ -18,7 +18,7 @@ from . import contact, friction
 from .compat import function_space, geometry_degree
 from .forms import FlowProblem
 from .geometry import ROLES, die_coordinate
-from .kinematics import equivalent_strain_rate
+from .kinematics import equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 
 
@@ -167,6 +167,14 @@ def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, flo
             external)
 
 
+def relative_divergence(problem: FlowProblem) -> float:
+    """||div u|| / ||e(u)|| (L2 norms over the strip): the volume change the penalty 1/d leaves, per unit
+    of deformation rate; Theorem 3.1 drives it to zero like O(d)."""
+    e = strain_rate(problem.u)
+    return float(np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)
+                         / _integrate(problem, ufl.inner(e, e) * problem.dx)))
+
+
 def scalars(problem: FlowProblem) -> dict[str, float]:
     """The summary numbers of a run: process force and pressure, die forces and the x force balance.
 
@@ -189,6 +197,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "applied_force_x": external,
         "force_balance_residual": residual,
         "divergence_l2": np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)),
+        "relative_divergence": relative_divergence(problem),
         "free_surface_crossing": free_surface_crossing(problem),
     }
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+import math
 import shutil
 import tempfile
 import time
@@ -17,7 +18,7 @@ from .output import load_velocity, save_velocity, write_die_profile, write_field
 from .plotting import write_die_plot, write_figures
 from .postprocess import die_profile, force_balance, output_fields, scalars
 from .scene import Scene
-from .solvers import SecantSolver, SolveResult
+from .solvers import ILL_CONDITIONED, SecantSolver, SolveResult
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +54,36 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         **scalars(problem),
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
     }
+    summary["warnings"] = warnings(summary, scene)
+    if comm.rank == 0:
+        for text in summary["warnings"]:
+            log.warning(text)
     return problem, result, summary
+
+
+COMPRESSIBLE = 0.1  # ||div u|| / ||e(u)|| above which the penalty solution is reported as compressible
+
+
+def warnings(summary: dict[str, Any], scene: Scene) -> list[str]:
+    """What a converged-looking run must still tell its user: a penalty too weak for incompressibility,
+    linear solves whose estimated error approaches the tolerance, a drawing stress the drawn strip
+    cannot carry."""
+    found = []
+    if summary["relative_divergence"] > COMPRESSIBLE:
+        found.append(f"penalty.d = {scene.penalty.d:g} lets the material compress: ||div u||/||e(u)|| = "
+                     f"{summary['relative_divergence']:.2g} (above {COMPRESSIBLE:g}); the results are those of a "
+                     "compressible material: use a smaller penalty.d (Theorem 3.1: the error falls like O(d))")
+    if summary["solve_error_estimate"] > ILL_CONDITIONED * scene.solver.tolerance:
+        found.append(f"ill-conditioned linear systems: estimated relative error of a solve "
+                     f"{summary['solve_error_estimate']:.1e}, above {ILL_CONDITIONED:g} of solver.tolerance; "
+                     "use larger penalty parameters (penalty.d, penalty.d_N, friction.d_T)")
+    if scene.process.kind == "drawing":
+        strength = 2 / math.sqrt(3) * float(scene.material.flow_stress([scene.reference_strain_rate])[0])
+        if summary["drawing_stress"] > strength:
+            found.append(f"the drawing stress {summary['drawing_stress']:.4g} exceeds the plane-strain yield stress "
+                         f"2k = {strength:.4g} of the drawn strip: it yields after the die, so no steady drawing "
+                         "exists at this reduction and friction (the limit of drawability)")
+    return found
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,

@@ -13,6 +13,7 @@ import json
 import logging
 import math
 import time
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,7 @@ from mpi4py import MPI
 from .errors import SceneError
 from .report import richardson
 from .run import solve_scene
-from .scene import apply_overrides, parse_override, scene_from_dict
+from .scene import apply_overrides, parse_override, read_scene_data, scene_from_dict
 
 log = logging.getLogger(__name__)
 QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
@@ -40,13 +41,56 @@ def parse_vary(texts: list[str]) -> list[tuple[str, list[str]]]:
     return grid
 
 
+def load_study(path: str | Path, overrides: list[str] | None = None) -> tuple[dict[str, Any], list[str], str | None]:
+    """A study file: a ``[study]`` table with ``scene`` (relative to the file), ``vary`` (a table of
+    key = [values]), optional ``set`` (a list of overrides) and ``quantity``. Returns the scene
+    document (with ``set`` and then ``overrides`` applied), the --vary strings and the quantity."""
+    path = Path(path)
+    try:
+        table = tomllib.loads(path.read_text()).get("study")
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError(str(path), f"not valid TOML: {exc}") from None
+    if not isinstance(table, dict):
+        raise SceneError("study", f"{path} has no [study] table")
+    unknown = set(table) - {"scene", "vary", "set", "quantity"}
+    if unknown:
+        raise SceneError(f"study.{sorted(unknown)[0]}", "unknown key (known: scene, vary, set, quantity)")
+    if not isinstance(table.get("scene"), str):
+        raise SceneError("study.scene", "must name the scene file (relative to the study file)")
+    vary, settings = table.get("vary"), table.get("set", [])
+    if not isinstance(vary, dict) or not vary or not all(isinstance(v, list) and v for v in vary.values()):
+        raise SceneError("study.vary", "must be a table of section.key = [value, ...]")
+    if not (isinstance(settings, list) and all(isinstance(o, str) for o in settings)):
+        raise SceneError("study.set", "must be a list of \"section.key=value\" strings")
+    quantity = table.get("quantity")
+    if quantity is not None and not isinstance(quantity, str):
+        raise SceneError("study.quantity", "must be a summary key")
+    data = read_scene_data(path.parent / table["scene"], [*settings, *(overrides or [])])
+    texts = [f"{key}={','.join(_toml_value(v) for v in values)}" for key, values in vary.items()]
+    return data, texts, quantity
+
+
+def _toml_value(value: Any) -> str:
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
 def exact_value(scene, quantity: str) -> float | None:
-    """Hill's slip-line ram pressure (1 + pi/2) k for frictionless square-die extrusion at reduction 1/2."""
-    if (scene.process.kind == "extrusion" and quantity == "ram_pressure" and scene.friction.mu == 0
-            and scene.process.applied_force is None and scene.geometry.mesh_file is None
-            and math.isclose(scene.geometry.exit_thickness, 0.5 * scene.geometry.entry_thickness)):
-        k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
+    """The exact value of ``quantity`` where a slip-line field is exact (verification.md):
+    - frictionless square-die extrusion at reduction 1/2: Hill's ram pressure (1 + pi/2) k;
+    - frictionless drawing without back tension at r = 2 sin(a)/(1 + 2 sin(a)) for the die semi-angle
+      a: one triangle and a centred fan, q = 2k(1 + a)(1 - r), drawing stress 2k(1 + a) r."""
+    geometry, process = scene.geometry, scene.process
+    if scene.friction.mu != 0 or process.applied_force is not None or geometry.mesh_file is not None:
+        return None
+    k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
+    if (process.kind == "extrusion" and quantity == "ram_pressure"
+            and math.isclose(geometry.exit_thickness, 0.5 * geometry.entry_thickness)):
         return (1 + math.pi / 2) * k
+    if process.kind == "drawing" and quantity in ("mean_die_pressure", "drawing_stress"):
+        angle = math.radians(geometry.die_angle)
+        r = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
+        if math.isclose(geometry.exit_thickness, geometry.entry_thickness * (1 - r), rel_tol=1e-9):
+            return 2 * k * (1 + angle) * ((1 - r) if quantity == "mean_die_pressure" else r)
     return None
 
 
