@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import dolfinx
 import dolfinx.fem
+import dolfinx.mesh
 from petsc4py import PETSc
 
 DOLFINX_VERSION = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
@@ -42,3 +43,37 @@ def cell_geometry_nodes(mesh) -> np.ndarray:
 def geometry_degree(mesh) -> int:
     """Polynomial degree of the coordinate map."""
     return mesh.geometry.cmap.degree
+
+
+def quadrature_space(mesh, degree: int, shape: tuple[int, ...]):
+    """Values at the Gauss points of ``ufl.dx(metadata={"quadrature_degree": degree})``, per cell."""
+    if LEGACY:
+        import ufl
+
+        element = ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, quad_scheme="default", shape=shape)
+        return dolfinx.fem.FunctionSpace(mesh, element)
+    import basix.ufl
+
+    element = basix.ufl.quadrature_element(mesh.basix_cell(), value_shape=shape, degree=degree)
+    return dolfinx.fem.functionspace(mesh, element)
+
+
+def quadrature_points(mesh, degree: int) -> np.ndarray:
+    """Reference Gauss points of the default scheme of that degree on the mesh's cells."""
+    import basix
+
+    cell = basix.CellType.quadrilateral if mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral \
+        else basix.CellType.triangle
+    return basix.make_quadrature(cell, degree)[0]
+
+
+def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx.fem.Expression) -> None:
+    """function <- expression evaluated at the Gauss points of every local cell (then ghosts updated)."""
+    mesh = function.function_space.mesh
+    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+    values = expression.eval(cells) if LEGACY else expression.eval(mesh, cells)
+    dofmap = function.function_space.dofmap
+    dofs = (dofmap.list.array.reshape(-1, dofmap.dof_layout.num_dofs) if LEGACY else dofmap.list)[cells]
+    block = dofmap.index_map_bs
+    function.x.array.reshape(-1, block)[dofs.ravel()] = values.reshape(dofs.size, block)
+    function.x.scatter_forward()

@@ -6,6 +6,8 @@ when the scene has Gamma5. Only the terms the scene needs are built.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import dolfinx.fem
 import dolfinx.fem.petsc
 import numpy as np
@@ -13,11 +15,28 @@ import ufl
 from petsc4py import PETSc
 
 from . import contact, friction
-from .compat import function_space, petsc_vec
+from .compat import function_space, petsc_vec, quadrature_points, quadrature_space
 from .geometry import ROLES, FormingMesh
 from .kinematics import deviatoric, deviatoric_product, equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 from .scene import Scene
+
+
+@dataclass
+class NewtonForms:
+    """What Newton's method needs of a problem (FlowProblem.newton_forms): compiled energy, residual and
+    operator; the dual stress at the Gauss points with the expressions that reset and update it; the
+    last step du, the iterate before it and the step length s of u <- u - s du."""
+
+    energy: dolfinx.fem.Form
+    residual: dolfinx.fem.Form
+    operator: dolfinx.fem.Form
+    dual: dolfinx.fem.Function
+    dual_reset: dolfinx.fem.Expression
+    dual_update: dolfinx.fem.Expression
+    step: dolfinx.fem.Function
+    previous: dolfinx.fem.Function
+    step_length: dolfinx.fem.Constant
 
 
 def quadrature_degree(element_degree: int, reduced: bool) -> int:
@@ -139,6 +158,71 @@ class FlowProblem:
         """f(v) = int_G5 F_N v_N of (3.2)."""
         F_N = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(self.scene.process.applied_force))
         return F_N * ufl.dot(v, self.n) * self.ds(ROLES["gamma5_force"])
+
+    # -- Newton's method: energy, residual and the primal-dual operator -------------------------
+    def newton_forms(self) -> NewtonForms:
+        """Energy Phi(u), residual F(u; v) = Phi'(u; v) and the primal-dual Newton operator, compiled.
+
+        Phi(u) = int W(rate(u)) + 1/(2d) (div u)^2 + int_G3 1/(2 d_N) (u_N^+)^2 + j_dT(u_friction; u) - f(u)
+        with W' = sigma_p, so F(u; v) = int tau(u):e(v) + ... is the Euler equation of (3.10)-(3.12) whose
+        fixed point the secant methods (3.13)/(3.33) find, tau(u) = 2/3 G(rate) e'(u) the deviatoric stress.
+
+        The operator linearises tau = tau(u) with a separate dual iterate tau_h at the Gauss points
+        (primal-dual Newton, as for total-variation problems): d tau = 2/3 G e'(du) + (G'/G) d rate tau_h.
+        With tau_h = tau(u) this is the consistent tangent, whose stiffness along the flow direction is
+        only about alpha times the secant; carrying tau_h separately (updated by the same linearisation
+        and capped at the flow stress) keeps the steps well scaled far from the answer. The contact
+        penalty enters with its active set at u (semismooth), the regularised friction with its
+        derivative at a fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the
+        nonlocal averaged normal stress is not differentiated). The rate is regularised as
+        sqrt(rate^2 + (1e-6 rate1)^2) so that everything stays finite in rigid zones.
+        """
+        u, scene, material = self.u, self.scene, self.scene.material
+        v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
+        step = dolfinx.fem.Function(self.V)          # du of the last Newton solve (u <- u - s du)
+        previous = dolfinx.fem.Function(self.V)      # u before that step
+        step_length = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+        dual = dolfinx.fem.Function(quadrature_space(self.mesh, self.full_degree, (2, 2)), name="dual_stress")
+        floor = 1e-6 * material.rate_floor
+
+        def rate(w):
+            e = strain_rate(w)
+            return ufl.sqrt(2.0 / 3.0 * deviatoric_product(e, e) + floor**2)
+
+        def stress(w):
+            return 2.0 / 3.0 * material.secant_ufl(rate(w)) * deviatoric(strain_rate(w))
+
+        def stress_change(w, dw, tau):
+            """d tau = 2/3 G e'(dw) + (G'/G) d rate tau at w."""
+            r = ufl.variable(rate(w))
+            g = material.secant_ufl(r)
+            d_rate = 2.0 / 3.0 * deviatoric_product(strain_rate(w), strain_rate(dw)) / r
+            return 2.0 / 3.0 * g * deviatoric(strain_rate(dw)) + ufl.diff(g, r) / g * d_rate * tau
+
+        energy = material.potential_ufl(rate(u)) * self.dx + 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
+        operator = ufl.inner(stress_change(u, du, dual), strain_rate(v)) * self.dx + self.volumetric_form(du, v)
+        if self.has_contact:
+            energy += 0.5 / scene.penalty.d_N * ufl.max_value(contact.normal_velocity(u, self.n), 0.0) ** 2 \
+                * self.ds_contact
+        if self.has_friction:
+            slip = friction.tangential(u, self.n)
+            tau_f = friction.friction_bound(scene.friction.mu, self.normal_pressure())
+            energy += tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact
+        if self.has_force:
+            energy -= ufl.action(self._load(v), u)
+        residual = ufl.derivative(energy, u, v)
+        boundary = residual - ufl.inner(stress(u), strain_rate(v)) * self.dx - self.volumetric_form(u, v)
+        if self.has_contact or self.has_friction:
+            operator += ufl.derivative(boundary, u, du)
+        # the dual update tau(u) - s d tau(du) at the old u, capped at the flow stress of the new u
+        updated = stress(previous) - step_length * stress_change(previous, step, dual)
+        equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
+        cap = material.secant_ufl(rate(u)) * rate(u)
+        capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
+        points = quadrature_points(self.mesh, self.full_degree)
+        return NewtonForms(dolfinx.fem.form(energy), dolfinx.fem.form(residual), dolfinx.fem.form(operator),
+                           dual, dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
+                           step, previous, step_length)
 
     # -- boundary conditions ------------------------------------------------------------------
     def boundary_dofs(self, role: str, component: int) -> np.ndarray:

@@ -47,10 +47,29 @@ class PiecewisePowerLaw:
         clipped = np.clip(np.asarray(rate, dtype=float), self.rate1, self.rate2)
         return self.A * clipped ** (self.alpha - 1.0)
 
+    @property
+    def rate_floor(self) -> float:
+        """The rate below which the secant is constant (rate1 of (4.5))."""
+        return self.rate1
+
     def secant_ufl(self, rate):
         """G(rate) of (4.5) as a UFL expression, for evaluation at quadrature points."""
         clipped = ufl.min_value(ufl.max_value(rate, self.rate1), self.rate2)
         return self.A * clipped ** (self.alpha - 1.0)
+
+    def potential_ufl(self, rate):
+        """W(rate) = int_0^rate sigma_p(s) ds of (4.5), whose derivative is sigma_p: the dissipation
+        potential minimised by the solution (the energy of the Newton line search)."""
+        g1, g2 = self.A * self.rate1 ** (self.alpha - 1.0), self.A * self.rate2 ** (self.alpha - 1.0)
+        w1 = g1 * self.rate1**2 / 2
+
+        def power(r):
+            return self.A * (r ** (self.alpha + 1.0) - self.rate1 ** (self.alpha + 1.0)) / (self.alpha + 1.0)
+
+        w2 = w1 + power(self.rate2)
+        return ufl.conditional(ufl.lt(rate, self.rate1), g1 * rate**2 / 2,
+                               ufl.conditional(ufl.lt(rate, self.rate2), w1 + power(rate),
+                                               w2 + g2 * (rate**2 - self.rate2**2) / 2))
 
 
 @dataclass(frozen=True)
@@ -87,6 +106,14 @@ class PowerLaw:
     def secant_ufl(self, rate):
         """G(rate) as a UFL expression, for evaluation at quadrature points."""
         return self.A * ufl.max_value(rate, self.rate_floor) ** (self.n - 1.0)
+
+    def potential_ufl(self, rate):
+        """W(rate) = int_0^rate sigma_p(s) ds (quadratic below rate_floor)."""
+        g = self.A * self.rate_floor ** (self.n - 1.0)
+        w1 = g * self.rate_floor**2 / 2
+        return ufl.conditional(ufl.lt(rate, self.rate_floor), g * rate**2 / 2,
+                               w1 + self.A * (rate ** (self.n + 1.0) - self.rate_floor ** (self.n + 1.0))
+                               / (self.n + 1.0))
 
 
 LAWS = {"piecewise_power": PiecewisePowerLaw, "power": PowerLaw}

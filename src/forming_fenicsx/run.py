@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 from .forms import FlowProblem
 from .geometry import build_mesh
+from .newton import NewtonSolver
 from .output import load_velocity, save_velocity, write_die_profile, write_fields, write_history, write_summary
 from .plotting import write_die_plot, write_figures
 from .postprocess import die_profile, force_balance, output_fields, scalars
@@ -36,9 +37,10 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     if restart is not None:
         initial = problem.u.copy()
         load_velocity(Path(restart) / "velocity.npz", initial)
-    solver = SecantSolver(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
+    method = NewtonSolver if scene.solver.method == "newton" else SecantSolver
+    solver = method(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
     result = solver.solve(initial)
-    solver.linear.destroy()
+    solver.destroy()
     problem.update_state(problem.u, friction_too=True)
     summary = {
         "scene": scene.to_dict(),

@@ -208,7 +208,8 @@ class Discretisation:
 
 @dataclass
 class Solver:
-    """Secant-modulus iteration: direct (3.13) or modified (3.33), stopped by the rule of (4.4).
+    """Nonlinear iteration: the secant-modulus methods direct (3.13) or modified (3.33), or Newton's
+    method after ``secant_start`` direct iterates (newton.py); all stopped by the rule of (4.4).
 
     ``stall_window``: inner iterations (a fifth of it for outer ones) without a new smallest increment
     after which the run stops as stalled or oscillating. ``force_tolerance`` (0: off, as in the
@@ -218,6 +219,7 @@ class Solver:
 
     method: str = "modified"
     tolerance: float = 1e-4
+    secant_start: int = 3
     max_iterations: int = 200
     max_outer_iterations: int = 50
     stall_window: int = 40
@@ -227,8 +229,10 @@ class Solver:
         "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"})
 
     def check(self) -> None:
-        if self.method not in ("direct", "modified"):
-            raise SceneError("solver.method", f"must be one of direct, modified; got {self.method!r}")
+        if self.method not in ("direct", "modified", "newton"):
+            raise SceneError("solver.method", f"must be one of direct, modified, newton; got {self.method!r}")
+        if not (isinstance(self.secant_start, int) and self.secant_start >= 0):
+            raise SceneError("solver.secant_start", f"must be an integer >= 0; got {self.secant_start!r}")
         if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
             raise SceneError("solver.tolerance", f"must lie in (0, 1) (delta of (4.4)); got {self.tolerance}")
         for key in ("max_iterations", "max_outer_iterations", "stall_window"):
@@ -301,6 +305,9 @@ class Scene:
         """Checks of each section, then of values that are valid alone but not together."""
         for section in dataclasses.fields(self):
             getattr(self, section.name).check()
+        if self.solver.method == "newton" and self.discretisation.averaging != "quadrature":
+            raise SceneError("solver.method", 'newton differentiates G at the integration points: it needs '
+                             f'discretisation.averaging = "quadrature"; got {self.discretisation.averaging!r}')
         if self.discretisation.mesh_size > self.geometry.thinnest:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "

@@ -26,12 +26,15 @@ ILL_CONDITIONED = 0.01  # a run warns when a linear solve's estimated error reac
 
 
 class LinearSolver:
-    """Matrix, right-hand side and KSP of one problem, created once and reused by every iterate."""
+    """Matrix, right-hand side and KSP of one bilinear form, created once and reused by every iterate
+    (the secant system b(u_n; ., .) of the problem by default, or another form such as a Jacobian)."""
 
-    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any]):
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
+                 linear: Any = None):
         self.problem = problem
-        self.A = dolfinx.fem.petsc.create_matrix(problem.a)
-        self.b = dolfinx.fem.petsc.create_vector(problem.residual)
+        self.a = bilinear if bilinear is not None else problem.a
+        self.A = dolfinx.fem.petsc.create_matrix(self.a)
+        self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.residual)
         self.ksp = PETSc.KSP().create(problem.comm)
         prefix = f"forming_{next(_prefixes)}_"
         self.ksp.setOptionsPrefix(prefix)
@@ -44,13 +47,17 @@ class LinearSolver:
         self.ksp.setOperators(self.A)
         self._residual = self.b.duplicate()
         self._correction = self.b.duplicate()
+        self._x: PETSc.Vec | None = None
+
+    def assemble_matrix(self) -> None:
+        self.A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(self.A, self.a, bcs=self.problem.bcs)
+        self.A.assemble()
 
     def solve(self) -> None:
         """Assemble K and F at the problem's current state and solve into problem.u."""
         problem = self.problem
-        self.A.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(self.A, problem.a, bcs=problem.bcs)
-        self.A.assemble()
+        self.assemble_matrix()
         with self.b.localForm() as local:
             local.set(0.0)
         if problem.L is not None:
@@ -58,14 +65,19 @@ class LinearSolver:
         dolfinx.fem.petsc.apply_lifting(self.b, [problem.a], bcs=[problem.bcs])
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, problem.bcs)
+        self.solve_system(petsc_vec(problem.u))
+        problem.u.x.scatter_forward()
+
+    def solve_system(self, x: PETSc.Vec) -> None:
+        """x = A^-1 b with the assembled A and b; a failed solve raises LinearSolveError."""
         try:
-            self.ksp.solve(self.b, petsc_vec(problem.u))
+            self.ksp.solve(self.b, x)
         except PETSc.Error as error:  # e.g. a zero pivot or a MUMPS failure: the same on every rank
             raise LinearSolveError(f"PETSc error {error.ierr} in KSPSolve") from None
         reason = self.ksp.getConvergedReason()
         if reason < 0:
             raise LinearSolveError(f"KSP diverged (reason {reason})")
-        problem.u.x.scatter_forward()
+        self._x = x
 
     def error_estimate(self) -> float:
         """Relative forward error of the last solve, ||A^-1 (b - A x)|| / ||x||: one step of iterative
@@ -73,7 +85,7 @@ class LinearSolver:
         solves, no new factorisation). A backward-stable LU leaves a residual of rounding size, so the
         estimate is about the condition number of K times the machine precision: it shows when a small
         penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear systems ill-conditioned."""
-        x = petsc_vec(self.problem.u)
+        x = self._x
         self.A.mult(x, self._residual)
         self._residual.aypx(-1.0, self.b)
         self.ksp.solve(self._residual, self._correction)
@@ -106,14 +118,17 @@ def _recent(increments: list[float], count: int = 6) -> str:
 
 @dataclass
 class IterationRecord:
-    """One linear solve: outer index m, inner index n, relative increment, elapsed seconds, and the
-    estimated relative error of the linear solve itself (LinearSolver.error_estimate)."""
+    """One linear solve: outer index m, inner index n, relative increment, elapsed seconds, the
+    estimated relative error of the linear solve itself (LinearSolver.error_estimate), and for Newton
+    steps the residual norm after the step and the line-search step length."""
 
     outer: int
     inner: int
     increment: float
     elapsed: float
     solve_error: float = 0.0
+    residual: float = math.nan
+    step: float = 1.0
 
 
 @dataclass
@@ -149,6 +164,10 @@ class SecantSolver:
         self._state_is_current = False
         self._difference = petsc_vec(problem.u).duplicate()
 
+    def destroy(self) -> None:
+        self.linear.destroy()
+        self._difference.destroy()
+
     def _step(self, result: SolveResult, outer: int, inner: int, start: float) -> float:
         """One linear solve from the current state; records and returns the relative increment.
 
@@ -180,6 +199,41 @@ class SecantSolver:
         if self.problem.comm.rank == 0:
             log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment, record.elapsed)
         return increment
+
+    def _must_stop(self, result: SolveResult, increments: list[float], outer: int, inner: int,
+                   friction_note: str) -> bool:
+        """The checks after every linear solve; True (with result.reason) when the run must stop: a
+        stop request, ill-conditioned solves, a non-finite iterate, divergence, a stall."""
+        settings, delta, increment = self.settings, self.settings.tolerance, increments[-1]
+        stop = self._stop_reason()
+        if stop:
+            result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
+            return True
+        solve_error = result.history[-1].solve_error if result.history else 0.0
+        if math.isfinite(increment) and solve_error > delta:
+            result.reason = (f"ill-conditioned linear systems: the estimated relative error of the linear "
+                             f"solve, {solve_error:.2e} (one step of iterative refinement), is above "
+                             f"delta {delta:g} at outer {outer}, inner {inner}, so the increment cannot "
+                             f"reliably fall below delta; {self._penalties()}")
+            return True
+        if not math.isfinite(increment):
+            result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
+                                              f"{inner}; the results are the previous iterate. Try a larger "
+                                              "penalty parameter (penalty.d, penalty.d_N)")
+            return True
+        if diverging(increments):
+            others = " or ".join(m for m in ("direct", "modified") if m != settings.method)
+            result.reason = (f"diverging: the increment grew for 5 iterations to {increment:.3e} (outer "
+                             f"{outer}, inner {inner}; last increments {_recent(increments)}){friction_note}. "
+                             f"Try the {others} method, a smaller friction coefficient or larger penalty "
+                             "parameters; see history.csv")
+            return True
+        if stalled(increments, settings.stall_window):
+            result.reason = (f"stalled or oscillating: no smaller increment in the last "
+                             f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
+                             f"increments {_recent(increments)}){friction_note}; see history.csv")
+            return True
+        return False
 
     def _contact_note(self) -> str:
         """Why friction may not settle with a stiff contact penalty: an increment delta*U of the velocity
@@ -226,6 +280,17 @@ class SecantSolver:
         return (f"; force balance residual {result.force_balance_checks[-1]:.3e} above "
                 f"solver.force_tolerance {self.settings.force_tolerance:g}")
 
+    def _start(self, initial: dolfinx.fem.Function | None, result: SolveResult, start: float) -> bool:
+        """u_{0,0}: ``initial`` (a restart) or the solution with a uniform modulus; False if that failed."""
+        problem = self.problem
+        if initial is not None:
+            petsc_vec(initial).copy(petsc_vec(problem.u))
+            dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
+            problem.u.x.scatter_forward()
+            return True
+        problem.set_uniform_secant(problem.scene.reference_strain_rate)
+        return math.isfinite(self._step(result, 0, 0, start))
+
     def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
         """Iterate until the stopping rule of (4.4) holds, from ``initial`` (a restart: u_{0,0} of the
         method) or else from the solution with a uniform modulus."""
@@ -233,14 +298,8 @@ class SecantSolver:
         delta, method = settings.tolerance, settings.method
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
-        if initial is not None:
-            petsc_vec(initial).copy(petsc_vec(problem.u))
-            dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
-            problem.u.x.scatter_forward()
-        else:
-            problem.set_uniform_secant(problem.scene.reference_strain_rate)
-            if not math.isfinite(self._step(result, 0, 0, start)):
-                return result
+        if not self._start(initial, result, start):
+            return result
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
         outer_increments: list[float] = []
         friction_note = (f"; at this friction coefficient the solution may not be unique{self._contact_note()}"
@@ -257,33 +316,7 @@ class SecantSolver:
                 self._state_is_current = False
                 increment = self._step(result, outer, inner, start)
                 increments.append(increment)
-                stop = self._stop_reason()
-                if stop:
-                    result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
-                    return result
-                solve_error = result.history[-1].solve_error if result.history else 0.0
-                if math.isfinite(increment) and solve_error > settings.tolerance:
-                    result.reason = (f"ill-conditioned linear systems: the estimated relative error of the linear "
-                                     f"solve, {solve_error:.2e} (one step of iterative refinement), is above "
-                                     f"delta {delta:g} at outer {outer}, inner {inner}, so the increment cannot "
-                                     f"reliably fall below delta; {self._penalties()}")
-                    return result
-                if not math.isfinite(increment):
-                    result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
-                                                      f"{inner}; the results are the previous iterate. Try a larger "
-                                                      "penalty parameter (penalty.d, penalty.d_N)")
-                    return result
-                if diverging(increments):
-                    other = "direct" if method == "modified" else "modified"
-                    result.reason = (f"diverging: the increment grew for 5 iterations to {increment:.3e} (outer "
-                                     f"{outer}, inner {inner}; last increments {_recent(increments)}){friction_note}. "
-                                     f"Try the {other} method, a smaller friction coefficient or larger penalty "
-                                     "parameters; see history.csv")
-                    return result
-                if stalled(increments, settings.stall_window):
-                    result.reason = (f"stalled or oscillating: no smaller increment in the last "
-                                     f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
-                                     f"increments {_recent(increments)}){friction_note}; see history.csv")
+                if self._must_stop(result, increments, outer, inner, friction_note):
                     return result
                 # with an outer (friction) loop, the force balance is checked when that loop converges
                 if increment < delta and (outer_limit > 1 or self._balanced(result)):

@@ -1,0 +1,134 @@
+"""Newton's method with a backtracking line search for the regularised problem (3.10)-(3.12).
+
+The secant-modulus methods (3.13)/(3.33) converge linearly; Newton's method on the same residual
+(FlowProblem.newton_forms) converges fast once near the answer. Its tangent is only about alpha times
+as stiff as the secant along the flow direction, so the iteration starts from the uniform-modulus
+solution and ``solver.secant_start`` direct secant iterates, and every Newton step is damped by a
+backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
+derivative). It stops with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (and the
+force balance if solver.force_tolerance is set).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+from petsc4py import PETSc
+
+from .compat import petsc_vec, set_at_quadrature_points
+from .errors import LinearSolveError
+from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, log
+
+ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
+MAX_HALVINGS = 12   # smallest step 2**-12
+
+
+class NewtonSolver(SecantSolver):
+    """Newton's method (solver.method = "newton") after a few direct secant iterates."""
+
+    def __init__(self, problem, petsc_options=None, balance=None, stop=None):
+        super().__init__(problem, petsc_options, balance, stop)
+        self.forms = problem.newton_forms()
+        self.newton = LinearSolver(problem, {**self.settings.petsc_options, **(petsc_options or {})},
+                                   bilinear=self.forms.operator, linear=self.forms.residual)
+        self._du = petsc_vec(problem.u).duplicate()
+        self._trial = petsc_vec(problem.u).duplicate()
+
+    def destroy(self) -> None:
+        super().destroy()
+        self.newton.destroy()
+        self._du.destroy()
+        self._trial.destroy()
+
+    def energy_value(self) -> float:
+        """Phi(u) at the current u (collective)."""
+        local = dolfinx.fem.assemble_scalar(self.forms.energy)
+        return self.problem.comm.allreduce(local)
+
+    def assemble_residual(self) -> PETSc.Vec:
+        """F(u) into the Newton right-hand side, the Dirichlet rows holding u - g (zero once u meets them)."""
+        b, u = self.newton.b, petsc_vec(self.problem.u)
+        with b.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.forms.residual)
+        dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], bcs=[self.problem.bcs], x0=[u], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self.problem.bcs, u, -1.0)
+        return b
+
+    def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
+        """Solve J du = F at u, then u <- u - s du with the largest s = 2^-j that lowers Phi by at least
+        ARMIJO * s * F.du. Returns the relative full step ||du||/||u|| (NaN after a failed solve)."""
+        problem, u, du = self.problem, petsc_vec(self.problem.u), self._du
+        problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
+        residual = self.assemble_residual().norm()
+        self.newton.assemble_matrix()
+        try:
+            self.newton.solve_system(du)
+        except LinearSolveError as error:
+            result.reason = (f"linear solve failed at Newton step {inner}: {error}; the results are the previous "
+                             "iterate. Try a secant method or larger penalty parameters")
+            return math.nan
+        result.linear_solves += 1
+        solve_error = self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
+        slope = self.newton.b.dot(du)  # F.du > 0 when -du is a descent direction of Phi
+        energy0 = self.energy_value()
+        forms = self.forms
+        du.copy(petsc_vec(forms.step))
+        forms.step.x.scatter_forward()
+        u.copy(petsc_vec(forms.previous))
+        forms.previous.x.scatter_forward()
+        u.copy(self._trial)
+        step = 1.0
+        for _ in range(MAX_HALVINGS + 1):
+            self._trial.copy(u)
+            u.axpy(-step, du)
+            problem.u.x.scatter_forward()
+            if self.energy_value() <= energy0 - ARMIJO * step * slope:
+                break
+            step *= 0.5
+        increment = du.norm() / u.norm() if u.norm() > 0 else math.inf
+        if not math.isfinite(increment):
+            self._trial.copy(u)
+            problem.u.x.scatter_forward()
+        else:
+            forms.step_length.value = step
+            set_at_quadrature_points(forms.dual, forms.dual_update)
+        record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step)
+        result.history.append(record)
+        if problem.comm.rank == 0:
+            log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  (%.1f s)", inner, increment,
+                 residual, step, record.elapsed)
+        return increment
+
+    def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
+        """Secant start, then Newton steps until the step is below delta (and the force balance holds)."""
+        problem, settings = self.problem, self.settings
+        start = time.perf_counter()
+        result = SolveResult(converged=False, reason="")
+        result.outer_iterations = 1
+        if not self._start(initial, result, start):
+            return result
+        friction_note = f"; friction may make the solution non-unique{self._contact_note()}" \
+            if problem.has_friction else ""
+        increments: list[float] = []
+        for inner in range(1, settings.secant_start + 1):
+            problem.update_state(problem.u, friction_too=True)
+            increments.append(self._step(result, 0, inner, start))
+            if self._must_stop(result, increments, 0, inner, ""):
+                return result
+        set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)
+        increments = []
+        for inner in range(1, settings.max_iterations + 1):
+            increment = self._newton_step(result, inner, start)
+            increments.append(increment)
+            if self._must_stop(result, increments, 0, inner, friction_note):
+                return result
+            if increment < settings.tolerance and self._balanced(result):
+                result.converged, result.reason = True, "increment below tolerance"
+                return result
+        result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
+                         f"{increments[-1]:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})")
+        return result
