@@ -17,7 +17,7 @@ from forming_fenicsx.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
 SLIP_LINE_Q = 250.0
-PARTS = ["table", "measures", "drive", "penalty", "rate", "exact", "methods"]
+PARTS = ["table", "measures", "drive", "penalty", "rate", "exact", "secant", "methods"]
 parser = argparse.ArgumentParser()
 parser.add_argument("--scene", default=str(Path(__file__).with_name("example2_drawing.toml")))
 parser.add_argument("--sizes", type=float, nargs="+", default=[0.1, 0.05, 0.025])
@@ -146,7 +146,31 @@ table(f"Exact slip-line field, r = {r_exact:.4f} (k = {k:.3f}: q = {exact_q:.2f}
         r.get("drawing_stress", math.nan), f"{100 * (r.get('drawing_stress', math.nan) / exact_t - 1):+.2f}%"]
        for r in results["exact"]])
 
-# ## 7. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
+# ## 7. Where the secant G is evaluated, and the linear branch of (4.5) above rate2 = 1e3: the exact-field
+# case and the paper's case (mu = 0, Q2 reduced), G averaged at the nodes as in the paper or taken at the
+# Gauss points, with the paper's rate2 or with rate2 = 1e9 (no linear branch at these rates)
+VARIANTS = [("nodes", 1e3), ("quadrature", 1e3), ("quadrature", 1e9)]
+for case, exit_thickness, reference in (("exact field", h0 * (1 - r_exact), exact_q), ("paper", h1, SLIP_LINE_Q)):
+    for averaging, rate2 in VARIANTS if "secant" in args.parts else []:
+        rows = []
+        for size_s in args.sizes:
+            s = run(f"geometry.exit_thickness={exit_thickness}", f"discretisation.mesh_size={size_s}",
+                    f"discretisation.averaging={averaging}", f"material.rate2={rate2}", *ELEMENTS["Q2 reduced"],
+                    *CONVERGED)
+            rows.append({"case": case, "averaging": averaging, "rate2": rate2, "mesh_size": size_s,
+                         "reference": reference, **s})
+        if len(rows) >= 3:
+            limit, order = richardson([r["mean_die_pressure"] for r in rows])
+            rows.append({"case": case, "averaging": averaging, "rate2": rate2, "mesh_size": "extrapolated",
+                         "reference": reference, "mean_die_pressure": limit, "order": order})
+        results["secant"].extend(rows)
+table("Secant at the nodes or at the Gauss points, and rate2 (mu = 0, Q2 reduced; reference: exact q or slip-line 250)",
+      ["case", "G at", "rate2", "h", "q_av", "against reference", "linear solves"],
+      [[r["case"], r["averaging"], r["rate2"], r["mesh_size"], r["mean_die_pressure"],
+        f"{100 * (r['mean_die_pressure'] / r['reference'] - 1):+.2f}%", r.get("linear_solves", "")]
+       for r in results["secant"]])
+
+# ## 8. Direct and modified methods at delta = 1e-4 (the paper's rule alone), Q1 complete, h = 0.05
 for mu in (0.0, 0.2, 0.4) if "methods" in args.parts else []:
     for method in ("direct", "modified"):
         s = run(f"friction.mu={mu}", f"discretisation.mesh_size={size}", f"solver.method={method}",

@@ -26,7 +26,7 @@ from .scene import Scene
 class NewtonForms:
     """What Newton's method needs of a problem (FlowProblem.newton_forms): compiled energy, residual and
     operator; the dual stress at the Gauss points with the expressions that reset and update it; the
-    last step du, the iterate before it and the step length s of u <- u - s du."""
+    last Newton step du and the iterate before it."""
 
     energy: dolfinx.fem.Form
     residual: dolfinx.fem.Form
@@ -36,7 +36,6 @@ class NewtonForms:
     dual_update: dolfinx.fem.Expression
     step: dolfinx.fem.Function
     previous: dolfinx.fem.Function
-    step_length: dolfinx.fem.Constant
 
 
 def quadrature_degree(element_degree: int, reduced: bool) -> int:
@@ -181,7 +180,6 @@ class FlowProblem:
         v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
         step = dolfinx.fem.Function(self.V)          # du of the last Newton solve (u <- u - s du)
         previous = dolfinx.fem.Function(self.V)      # u before that step
-        step_length = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(1.0))
         dual = dolfinx.fem.Function(quadrature_space(self.mesh, self.full_degree, (2, 2)), name="dual_stress")
         floor = 1e-6 * material.rate_floor
 
@@ -214,15 +212,16 @@ class FlowProblem:
         boundary = residual - ufl.inner(stress(u), strain_rate(v)) * self.dx - self.volumetric_form(u, v)
         if self.has_contact or self.has_friction:
             operator += ufl.derivative(boundary, u, du)
-        # the dual update tau(u) - s d tau(du) at the old u, capped at the flow stress of the new u
-        updated = stress(previous) - step_length * stress_change(previous, step, dual)
+        # the full dual Newton step tau(u) - d tau(du) at the old u (whatever primal step the line search
+        # took), capped at the flow stress of the new u: the projection of primal-dual Newton methods
+        updated = stress(previous) - stress_change(previous, step, dual)
         equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
         cap = material.secant_ufl(rate(u)) * rate(u)
         capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
         points = quadrature_points(self.mesh, self.full_degree)
         return NewtonForms(dolfinx.fem.form(energy), dolfinx.fem.form(residual), dolfinx.fem.form(operator),
                            dual, dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
-                           step, previous, step_length)
+                           step, previous)
 
     # -- boundary conditions ------------------------------------------------------------------
     def boundary_dofs(self, role: str, component: int) -> np.ndarray:

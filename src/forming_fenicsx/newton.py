@@ -94,8 +94,7 @@ class NewtonSolver(SecantSolver):
             self._trial.copy(u)
             problem.u.x.scatter_forward()
         else:
-            forms.step_length.value = step
-            set_at_quadrature_points(forms.dual, forms.dual_update)
+            set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
         record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step)
         result.history.append(record)
         if problem.comm.rank == 0:

@@ -1,0 +1,107 @@
+"""Newton's method (solver.method = "newton"): the primal-dual operator is the consistent tangent when
+the dual stress equals tau(u) (a Taylor test), and Newton reaches the secant methods' answer on both
+examples in at most 15 linear solves."""
+import csv
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import dolfinx.fem.petsc
+
+from forming_fenicsx.compat import petsc_vec, set_at_quadrature_points
+from forming_fenicsx.errors import SceneError
+from forming_fenicsx.forms import FlowProblem
+from forming_fenicsx.geometry import build_mesh
+from forming_fenicsx.newton import NewtonSolver
+from forming_fenicsx.run import run_scene, solve_scene
+from forming_fenicsx.solvers import SecantSolver
+
+from conftest import make_scene
+
+QUADRATURE = {"mesh_size": 0.5, "averaging": "quadrature"}
+DRAWING = {"mesh_size": 0.1, "element": "Q2", "volumetric_integration": "reduced", "averaging": "quadrature"}
+
+
+def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
+    """F(u + h w) - F(u) - h J w = O(h^2) at a secant iterate, J the operator with dual = tau(u)
+    (with friction, at a fixed friction bound). h w stays below rate1 * h_mesh: the rigid zones' rates
+    must not cross the kink of (4.5) at rate1 (larger steps give a first-order remainder there)."""
+    scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING, friction={"mu": 0.2},
+                       solver={"method": "direct", "tolerance": 1e-2})
+    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    SecantSolver(problem).solve()
+    newton = NewtonSolver(problem)
+    problem.freeze_friction(problem.u)
+    set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
+    u = petsc_vec(problem.u)
+    start, residual = u.copy(), newton.assemble_residual().copy()
+    newton.newton.assemble_matrix()
+    direction = u.duplicate()
+    direction.setRandom(PETSc_random(problem.comm))
+    dolfinx.fem.petsc.set_bc(direction, problem.bcs, scale=0.0)  # zero on the constrained dofs
+    change = direction.duplicate()
+    newton.newton.A.mult(direction, change)
+    remainders = []
+    for h in (1e-5, 1e-6, 1e-7):
+        start.copy(u)
+        u.axpy(h, direction)
+        problem.u.x.scatter_forward()
+        difference = newton.assemble_residual().copy()
+        difference.axpy(-1.0, residual)
+        difference.axpy(-h, change)
+        remainders.append(difference.norm())
+    rates = np.log10(np.array(remainders[:-1]) / np.array(remainders[1:]))
+    assert rates.min() > 1.8  # second order: the remainder falls a hundredfold per decade of h
+    newton.destroy()
+
+
+def PETSc_random(comm):
+    from petsc4py import PETSc
+
+    random = PETSc.Random().create(comm)
+    random.setSeed(7)
+    random.setFromOptions()
+    return random
+
+
+def secant_reference(**sections) -> dict:
+    sections["solver"] = {**sections.get("solver", {}), "method": "direct", "tolerance": 1e-7,
+                          "max_iterations": 3000, "stall_window": 400}
+    return solve_scene(make_scene(**sections))[2]
+
+
+def test_newton_extrusion_few_solves_same_answer():
+    """Example 1 (h = 0.5): measured 15 linear solves against 500+ for the direct method at 1e-7."""
+    newton = solve_scene(make_scene(discretisation=QUADRATURE, solver={"method": "newton"}))[2]
+    reference = secant_reference(discretisation=QUADRATURE)
+    assert newton["converged"] and newton["linear_solves"] <= 15
+    assert newton["ram_pressure"] == pytest.approx(reference["ram_pressure"], rel=1e-3)
+    assert newton["force_balance_residual"] < 1e-4
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.4])
+def test_newton_drawing_with_contact_and_friction(mu):
+    """Example 2 (Q2 reduced, h = 0.1) with the force criterion: at most 15 solves, q_av and the drawing
+    stress of the direct method at delta = 1e-7 to 1e-3."""
+    sections = dict(process={"kind": "drawing"}, discretisation=DRAWING, friction={"mu": mu})
+    newton = solve_scene(make_scene(**sections, solver={"method": "newton", "force_tolerance": 1e-3}))[2]
+    reference = secant_reference(**sections)
+    assert newton["converged"] and newton["linear_solves"] <= 15
+    for key in ("mean_die_pressure", "drawing_stress"):
+        assert newton[key] == pytest.approx(reference[key], rel=1e-3)
+
+
+def test_newton_history_and_scene_check(shared_tmp):
+    """history.csv carries the residual norm and the step length of each Newton step; Newton needs the
+    secant at the Gauss points."""
+    out = shared_tmp / "newton"
+    run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0}, solver={"method": "newton"}), out)
+    MPI.COMM_WORLD.barrier()
+    with (out / "history.csv").open() as stream:
+        rows = list(csv.DictReader(stream))
+    newton_rows = [r for r in rows if r["residual_norm"] != "nan"]
+    assert newton_rows and all(0 < float(r["step_length"]) <= 1 for r in newton_rows)
+    assert float(newton_rows[-1]["relative_increment"]) < 1e-4
+    with pytest.raises(SceneError, match="averaging"):
+        make_scene(solver={"method": "newton"})
