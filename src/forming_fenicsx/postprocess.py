@@ -171,8 +171,10 @@ def relative_divergence(problem: FlowProblem) -> float:
     """||div u|| / ||e(u)|| (L2 norms over the strip): the volume change the penalty 1/d leaves, per unit
     of deformation rate; Theorem 3.1 drives it to zero like O(d)."""
     e = strain_rate(problem.u)
-    return float(np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)
-                         / _integrate(problem, ufl.inner(e, e) * problem.dx)))
+    deformation = _integrate(problem, ufl.inner(e, e) * problem.dx)
+    if deformation == 0:  # no deformation at all (e.g. a first solve that failed)
+        return math.nan
+    return float(np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol) / deformation))
 
 
 def scalars(problem: FlowProblem) -> dict[str, float]:

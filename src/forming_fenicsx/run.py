@@ -77,7 +77,7 @@ def warnings(summary: dict[str, Any], scene: Scene) -> list[str]:
                      "compressible material: use a smaller penalty.d (Theorem 3.1: the error falls like O(d))")
     if summary["solve_error_estimate"] > ILL_CONDITIONED * scene.solver.tolerance:
         found.append(f"ill-conditioned linear systems: estimated relative error of a solve "
-                     f"{summary['solve_error_estimate']:.1e}, above {ILL_CONDITIONED:g} of solver.tolerance; "
+                     f"{summary['solve_error_estimate']:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; "
                      "use larger penalty parameters (penalty.d, penalty.d_N, friction.d_T)")
     if scene.process.kind == "drawing":
         strength = 2 / math.sqrt(3) * float(scene.material.flow_stress([scene.reference_strain_rate])[0])

@@ -23,6 +23,7 @@ from .forms import FlowProblem
 log = logging.getLogger(__name__)
 _prefixes = itertools.count()
 ILL_CONDITIONED = 0.01  # a run warns when a linear solve's estimated error reaches this fraction of delta
+UNSOLVABLE = 10.0       # and stops at once when it reaches this multiple of delta
 
 
 class LinearSolver:
@@ -210,12 +211,15 @@ class SecantSolver:
             result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
             return True
         solve_error = result.history[-1].solve_error if result.history else 0.0
-        if math.isfinite(increment) and solve_error > delta:
+        if math.isfinite(increment) and solve_error > UNSOLVABLE * delta:
             result.reason = (f"ill-conditioned linear systems: the estimated relative error of the linear "
-                             f"solve, {solve_error:.2e} (one step of iterative refinement), is above "
-                             f"delta {delta:g} at outer {outer}, inner {inner}, so the increment cannot "
-                             f"reliably fall below delta; {self._penalties()}")
+                             f"solve, {solve_error:.2e} (one step of iterative refinement), is {UNSOLVABLE:g} times "
+                             f"delta {delta:g} or more at outer {outer}, inner {inner}, so the increment cannot "
+                             f"fall below delta; {self._penalties()}")
             return True
+        if solve_error > ILL_CONDITIONED * delta:
+            friction_note += (f"; the linear systems are ill-conditioned (estimated solve error {solve_error:.1e}): "
+                              f"{self._penalties()}")
         if not math.isfinite(increment):
             result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
                                               f"{inner}; the results are the previous iterate. Try a larger "
