@@ -1,4 +1,5 @@
-"""The ``forming`` command: ``forming run SCENE`` and ``forming mesh SCENE -o FILE``.
+"""The ``forming`` command: ``forming run SCENE``, ``forming study``, ``forming bench`` and
+``forming mesh SCENE -o FILE``.
 
 Arguments after a lone ``--`` are PETSc options (``-- -ksp_type preonly -pc_type lu``) and take
 precedence over the scene's ``solver.petsc_options``.
@@ -70,6 +71,8 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--quantity", help="summary key to measure (default: ram_pressure or mean_die_pressure)")
     study.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
     study.add_argument("--quiet", action="store_true", help="log warnings only")
+    sub.add_parser("bench", help="the nonlinear solvers side by side on both examples: solves, times, memory "
+                   "(forming bench --help)", add_help=False)
     mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
     mesh.add_argument("scene", help="scene TOML file")
     mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
@@ -91,6 +94,10 @@ def configure_logging(quiet: bool, rank: int) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["bench"]:  # its own parser: every case runs in a child process
+        from .bench import main as bench
+
+        return bench(argv[1:])
     petsc_args: list[str] = []
     if "--" in argv:
         split = argv.index("--")

@@ -19,7 +19,7 @@ from petsc4py import PETSc
 
 from .compat import petsc_vec, set_at_quadrature_points
 from .errors import LinearSolveError
-from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, log
+from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, Timings, log
 
 ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
 MAX_HALVINGS = 12   # smallest step 2**-12
@@ -44,11 +44,15 @@ class NewtonSolver(SecantSolver):
 
     def energy_value(self) -> float:
         """Phi(u) at the current u (collective)."""
+        start = time.perf_counter()
         local = dolfinx.fem.assemble_scalar(self.forms.energy)
-        return self.problem.comm.allreduce(local)
+        value = self.problem.comm.allreduce(local)
+        self.newton.timings.assembly += time.perf_counter() - start
+        return value
 
     def assemble_residual(self) -> PETSc.Vec:
         """F(u) into the Newton right-hand side, the Dirichlet rows holding u - g (zero once u meets them)."""
+        start = time.perf_counter()
         b, u = self.newton.b, petsc_vec(self.problem.u)
         with b.localForm() as local:
             local.set(0.0)
@@ -56,6 +60,7 @@ class NewtonSolver(SecantSolver):
         dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], bcs=[self.problem.bcs], x0=[u], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(b, self.problem.bcs, u, -1.0)
+        self.newton.timings.assembly += time.perf_counter() - start
         return b
 
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
@@ -102,7 +107,10 @@ class NewtonSolver(SecantSolver):
                  residual, step, record.elapsed)
         return increment
 
-    def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
+    def timings(self) -> Timings:
+        return self.linear.timings + self.newton.timings
+
+    def _iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
         """Secant start, then Newton steps until the step is below delta (and the force balance holds)."""
         problem, settings = self.problem, self.settings
         start = time.perf_counter()

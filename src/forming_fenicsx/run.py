@@ -39,6 +39,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         load_velocity(Path(restart) / "velocity.npz", initial)
     method = NewtonSolver if scene.solver.method == "newton" else SecantSolver
     solver = method(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
+    setup = time.perf_counter() - start
     result = solver.solve(initial)
     solver.destroy()
     problem.update_state(problem.u, friction_too=True)
@@ -55,12 +56,23 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "restarted_from": str(restart) if restart is not None else None,
         **scalars(problem),
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
+        "time_split_s": time_split(comm, setup, result),
     }
     summary["warnings"] = warnings(summary, scene)
     if comm.rank == 0:
         for text in summary["warnings"]:
             log.warning(text)
     return problem, result, summary
+
+
+def time_split(comm: MPI.Comm, setup: float, result: SolveResult) -> dict[str, float]:
+    """Seconds (the slowest rank's) in setup (mesh, spaces, compiled forms), and within the iteration in
+    assembly, factorisation, solves and the rest (state updates, projections, checks)."""
+    timings = result.timings
+    rest = result.iteration_time - timings.assembly - timings.factorisation - timings.solve
+    return {key: comm.allreduce(value, op=MPI.MAX) for key, value in
+            (("setup", setup), ("assembly", timings.assembly), ("factorisation", timings.factorisation),
+             ("solve", timings.solve), ("rest", rest))}
 
 
 COMPRESSIBLE = 0.1  # ||div u|| / ||e(u)|| above which the penalty solution is reported as compressible

@@ -49,16 +49,20 @@ class LinearSolver:
         self._residual = self.b.duplicate()
         self._correction = self.b.duplicate()
         self._x: PETSc.Vec | None = None
+        self.timings = Timings()
 
     def assemble_matrix(self) -> None:
+        start = time.perf_counter()
         self.A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(self.A, self.a, bcs=self.problem.bcs)
         self.A.assemble()
+        self.timings.assembly += time.perf_counter() - start
 
     def solve(self) -> None:
         """Assemble K and F at the problem's current state and solve into problem.u."""
         problem = self.problem
         self.assemble_matrix()
+        start = time.perf_counter()
         with self.b.localForm() as local:
             local.set(0.0)
         if problem.L is not None:
@@ -66,13 +70,21 @@ class LinearSolver:
         dolfinx.fem.petsc.apply_lifting(self.b, [problem.a], bcs=[problem.bcs])
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, problem.bcs)
+        self.timings.assembly += time.perf_counter() - start
         self.solve_system(petsc_vec(problem.u))
         problem.u.x.scatter_forward()
 
     def solve_system(self, x: PETSc.Vec) -> None:
-        """x = A^-1 b with the assembled A and b; a failed solve raises LinearSolveError."""
+        """x = A^-1 b with the assembled A and b (the factorisation, in PCSetUp, timed apart from the
+        solve); a failed solve raises LinearSolveError."""
         try:
+            start = time.perf_counter()
+            self.ksp.setUp()
+            self.ksp.getPC().setUp()  # refactorises when A changed (KSPSetUp alone does so only once)
+            factorised = time.perf_counter()
             self.ksp.solve(self.b, x)
+            self.timings.factorisation += factorised - start
+            self.timings.solve += time.perf_counter() - factorised
         except PETSc.Error as error:  # e.g. a zero pivot or a MUMPS failure: the same on every rank
             raise LinearSolveError(f"PETSc error {error.ierr} in KSPSolve") from None
         reason = self.ksp.getConvergedReason()
@@ -87,15 +99,31 @@ class LinearSolver:
         estimate is about the condition number of K times the machine precision: it shows when a small
         penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear systems ill-conditioned."""
         x = self._x
+        start = time.perf_counter()
         self.A.mult(x, self._residual)
         self._residual.aypx(-1.0, self.b)
         self.ksp.solve(self._residual, self._correction)
+        self.timings.solve += time.perf_counter() - start
         norm = x.norm()
         return self._correction.norm() / norm if norm > 0 else 0.0
 
     def destroy(self) -> None:
         for item in (self.ksp, self.A, self.b, self._residual, self._correction):
             item.destroy()
+
+
+@dataclass
+class Timings:
+    """Seconds spent in assembly, in the factorisation (KSPSetUp) and in the solves (with the
+    iterative-refinement estimate) of a run's linear systems."""
+
+    assembly: float = 0.0
+    factorisation: float = 0.0
+    solve: float = 0.0
+
+    def __add__(self, other: "Timings") -> "Timings":
+        return Timings(self.assembly + other.assembly, self.factorisation + other.factorisation,
+                       self.solve + other.solve)
 
 
 def stalled(increments: list[float], window: int) -> bool:
@@ -140,6 +168,8 @@ class SolveResult:
     outer_iterations: int = 0
     history: list[IterationRecord] = field(default_factory=list)
     force_balance_checks: list[float] = field(default_factory=list)
+    timings: Timings = field(default_factory=Timings)
+    iteration_time: float = 0.0
 
     @property
     def solve_error(self) -> float:
@@ -297,7 +327,18 @@ class SecantSolver:
 
     def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
         """Iterate until the stopping rule of (4.4) holds, from ``initial`` (a restart: u_{0,0} of the
-        method) or else from the solution with a uniform modulus."""
+        method) or else from the solution with a uniform modulus; with the time split of the run."""
+        start = time.perf_counter()
+        result = self._iterate(initial)
+        result.iteration_time = time.perf_counter() - start
+        result.timings = self.timings()
+        return result
+
+    def timings(self) -> Timings:
+        return self.linear.timings
+
+    def _iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
+        """The secant-modulus iteration (3.13) or (3.33)."""
         problem, settings = self.problem, self.settings
         delta, method = settings.tolerance, settings.method
         start = time.perf_counter()

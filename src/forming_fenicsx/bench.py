@@ -1,0 +1,144 @@
+"""`forming bench`: the nonlinear solvers side by side on Example 1 and Example 2, with their costs.
+
+Each case (example, mesh size, method, MPI ranks) runs in a process of its own (``mpirun -n R python -m
+forming_fenicsx.bench --case JSON``), so that its peak memory and time are its own; the parent collects
+one JSON line per case and prints and writes the table. All methods use the secant at the Gauss points
+(Newton needs it), so that every method solves the same discrete problem and their results can be
+compared: "vs direct" is the relative difference from the direct method on the same mesh and ranks.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+from .report import markdown_table
+
+DEMOS = Path(__file__).resolve().parents[2] / "demos"
+EXAMPLES = {
+    1: ("example1_extrusion.toml", "ram_pressure", []),
+    2: ("example2_drawing_mu02.toml", "mean_die_pressure",
+        ["discretisation.element=Q2", "discretisation.volumetric_integration=reduced"]),
+}
+DEFAULT_SIZES = {1: [0.25, 0.11], 2: [0.05, 0.025]}
+METHODS = ("direct", "modified", "newton")
+
+
+def run_case(case: dict[str, Any]) -> dict[str, Any]:
+    """Solve one case in this process (all ranks) and return its row (on every rank)."""
+    from mpi4py import MPI
+
+    from .run import solve_scene
+    from .scene import load_scene
+    from .study import exact_value
+
+    scene_file, quantity, settings = EXAMPLES[case["example"]]
+    scene = load_scene(Path(case.get("demos", DEMOS)) / scene_file, [
+        *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
+        f"solver.method={case['method']}", "solver.max_iterations=1000", "output.fields=false",
+        "output.figures=false", *case.get("set", [])])
+    summary = solve_scene(scene)[2]
+    comm = MPI.COMM_WORLD
+    peak = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.SUM) / 1024.0
+    split = summary["time_split_s"]
+    solves = max(summary["linear_solves"], 1)
+    return {**case, "ranks": comm.size, "dofs": summary["dofs"], "converged": summary["converged"],
+            "linear_solves": summary["linear_solves"], "wall_time_s": summary["wall_time_s"], **{
+                f"{key}_s": value for key, value in split.items()},
+            "outside_per_solve_s": (split["assembly"] + split["rest"]) / solves,
+            "factor_solve_per_solve_s": (split["factorisation"] + split["solve"]) / solves,
+            "peak_memory_mb": peak, "quantity": quantity, "value": summary[quantity],
+            "exact": exact_value(scene, quantity), "force_balance_residual": summary["force_balance_residual"]}
+
+
+def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
+    """Run one case under ``mpirun -n ranks`` and read its JSON row."""
+    command = [sys.executable, "-m", "forming_fenicsx.bench", "--case", json.dumps(case)]
+    launcher = shutil.which("mpirun") or shutil.which("mpiexec")
+    if launcher:
+        command = [launcher, "-n", str(ranks), *command]
+    elif ranks != 1:
+        raise RuntimeError("no mpirun or mpiexec on PATH for a run on more than one rank")
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    rows = [line for line in done.stdout.splitlines() if line.startswith("{")]
+    if done.returncode != 0 or not rows:
+        raise RuntimeError(f"bench case {case} on {ranks} ranks failed:\n{done.stderr[-2000:]}")
+    return json.loads(rows[-1])
+
+
+def compare(rows: list[dict[str, Any]]) -> None:
+    """Add the error against the exact value and the difference from the direct method (in place)."""
+    for row in rows:
+        row["error"] = abs(row["value"] / row["exact"] - 1) if row.get("exact") else None
+        direct = next((r for r in rows if r["method"] == "direct" and r["example"] == row["example"]
+                       and r["mesh_size"] == row["mesh_size"] and r["ranks"] == row["ranks"]), None)
+        row["vs_direct"] = abs(row["value"] / direct["value"] - 1) if direct else None
+        row["speedup_vs_direct"] = direct["wall_time_s"] / row["wall_time_s"] if direct else None
+        serial = next((r for r in rows if r["ranks"] == 1 and r["method"] == row["method"]
+                       and r["example"] == row["example"] and r["mesh_size"] == row["mesh_size"]), None)
+        row["speedup_vs_1_rank"] = serial["wall_time_s"] / row["wall_time_s"] if serial else None
+
+
+def table(rows: list[dict[str, Any]]) -> str:
+    def number(value, fmt):
+        return format(value, fmt) if value is not None else ""
+
+    return markdown_table("forming bench", [
+        "example", "h", "ranks", "method", "dofs", "linear solves", "wall s", "setup s", "assembly s",
+        "factorisation s", "solve s", "rest s", "outside/inside per solve", "peak MB", "quantity", "error",
+        "vs direct", "speed-up vs direct", "speed-up vs 1 rank"],
+        [[r["example"], r["mesh_size"], r["ranks"], r["method"], r["dofs"], r["linear_solves"],
+          f"{r['wall_time_s']:.2f}", f"{r['setup_s']:.2f}", f"{r['assembly_s']:.2f}",
+          f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}", f"{r['rest_s']:.2f}",
+          f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}", f"{r['peak_memory_mb']:.0f}",
+          f"{r['value']:.6g}", number(r["error"], ".2e"), number(r["vs_direct"], ".1e"),
+          number(r["speedup_vs_direct"], ".2f"), number(r["speedup_vs_1_rank"], ".2f")] for r in rows])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="forming bench", description=__doc__.splitlines()[0])
+    parser.add_argument("--case", help=argparse.SUPPRESS)  # one case, in a child process
+    parser.add_argument("--examples", type=int, nargs="+", default=[1, 2], choices=sorted(EXAMPLES))
+    parser.add_argument("--sizes", type=float, nargs="+", help="mesh sizes (default: two per example)")
+    parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    parser.add_argument("--ranks", type=int, nargs="+", default=[1], help="MPI ranks of each case (e.g. 1 2)")
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                        help="override a scene value in every case")
+    parser.add_argument("--out", default="results/bench.json")
+    args = parser.parse_args(argv)
+    if args.case:
+        row = run_case(json.loads(args.case))
+        from mpi4py import MPI
+
+        if MPI.COMM_WORLD.rank == 0:
+            print(json.dumps(row), flush=True)
+        return 0
+    if "OMPI_COMM_WORLD_SIZE" in os.environ or "PMI_RANK" in os.environ:
+        print("forming bench: run it without mpirun; --ranks sets the ranks of each case", file=sys.stderr)
+        return 2
+    rows = []
+    for example in args.examples:
+        for size in args.sizes or DEFAULT_SIZES[example]:
+            for ranks in args.ranks:
+                for method in args.methods:
+                    case = {"example": example, "mesh_size": size, "method": method, "set": args.set}
+                    rows.append(_launch(case, ranks))
+                    print(f"example {example}, h = {size}, {ranks} rank(s), {method}: {rows[-1]['linear_solves']} "
+                          f"solves, {rows[-1]['wall_time_s']:.2f} s", flush=True)
+    compare(rows)
+    print(table(rows))
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(rows, indent=1))
+    print(f"\nwritten {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,46 @@
+"""`forming bench`: each case in a child process under mpirun, a row per case with solves, the time
+split, peak memory, the result and its comparison with the direct method."""
+import json
+import os
+import subprocess
+import sys
+
+from mpi4py import MPI
+
+from forming_fenicsx.bench import compare, run_case
+
+
+def test_run_case_in_process_gives_a_full_row():
+    row = run_case({"example": 1, "mesh_size": 1.0, "method": "newton"})
+    assert row["converged"] and row["ranks"] == MPI.COMM_WORLD.size and row["linear_solves"] <= 15
+    split = sum(row[f"{key}_s"] for key in ("setup", "assembly", "factorisation", "solve", "rest"))
+    assert abs(split - row["wall_time_s"]) < 0.5 * row["wall_time_s"]  # the rest is post-processing
+    assert row["factorisation_s"] > 0 and row["peak_memory_mb"] > 50
+    assert row["exact"] is not None and abs(row["value"] / row["exact"] - 1) < 0.2
+
+
+def test_bench_command_launches_each_case_and_compares(shared_tmp):
+    """The parent (outside any MPI job) launches the cases under mpirun and compares them."""
+    out = shared_tmp / "bench.json"
+    if MPI.COMM_WORLD.rank == 0:
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                   OMPI_MCA_rmaps_base_oversubscribe="1", PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.cli", "bench", "--examples", "1", "--sizes",
+                               "1.0", "--methods", "direct", "newton", "--out", str(out)],
+                              capture_output=True, text=True, env=env, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert "| example | h | ranks | method |" in done.stdout
+    MPI.COMM_WORLD.barrier()
+    rows = {r["method"]: r for r in json.loads(out.read_text())}
+    assert rows["newton"]["linear_solves"] < rows["direct"]["linear_solves"]
+    assert rows["newton"]["vs_direct"] < 1e-3 and rows["direct"]["vs_direct"] == 0
+
+
+def test_compare_against_direct_and_one_rank():
+    rows = [{"example": 1, "mesh_size": 0.5, "method": m, "ranks": r, "value": v, "exact": 2.0, "wall_time_s": t}
+            for m, r, v, t in (("direct", 1, 2.2, 8.0), ("newton", 1, 2.2022, 2.0), ("newton", 2, 2.2022, 1.0))]
+    compare(rows)
+    assert abs(rows[1]["vs_direct"] - 1e-3) < 1e-12
+    assert rows[1]["speedup_vs_direct"] == 4.0 and rows[2]["speedup_vs_1_rank"] == 2.0
+    assert abs(rows[0]["error"] - 0.1) < 1e-12 and rows[2]["vs_direct"] is None
