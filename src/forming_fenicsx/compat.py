@@ -77,3 +77,20 @@ def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx
     block = dofmap.index_map_bs
     function.x.array.reshape(-1, block)[dofs.ravel()] = values.reshape(dofs.size, block)
     function.x.scatter_forward()
+
+
+def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degree: int):
+    """The velocity-pressure space (vector Lagrange x ``pressure_family``, e.g. "DPC" for P1 discontinuous
+    on quadrilaterals)."""
+    if LEGACY:
+        import ufl
+
+        velocity = ufl.VectorElement("Lagrange", mesh.ufl_cell(), velocity_degree)
+        pressure = ufl.FiniteElement(pressure_family, mesh.ufl_cell(), pressure_degree)
+        return dolfinx.fem.FunctionSpace(mesh, ufl.MixedElement([velocity, pressure]))
+    import basix.ufl
+
+    cell = mesh.basix_cell()
+    velocity = basix.ufl.element("Lagrange", cell, velocity_degree, shape=(mesh.geometry.dim,))
+    pressure = basix.ufl.element(pressure_family, cell, pressure_degree)
+    return dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([velocity, pressure]))

@@ -15,7 +15,7 @@ import ufl
 from petsc4py import PETSc
 
 from . import contact, friction
-from .compat import function_space, petsc_vec, quadrature_points, quadrature_space
+from .compat import function_space, mixed_space, petsc_vec, quadrature_points, quadrature_space
 from .geometry import ROLES, FormingMesh
 from .kinematics import deviatoric, deviatoric_product, equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
@@ -60,13 +60,23 @@ class FlowProblem:
         self.constraints = forming_mesh.constraints
         self.comm = mesh.comm
         k = scene.discretisation.degree
-        self.V = function_space(mesh, "P", k, (2,))
-        self.u = dolfinx.fem.Function(self.V, name="velocity")
+        # the unknown of the linear systems: the velocity (penalty), or velocity and pressure (mixed)
+        self.mixed = scene.discretisation.formulation == "mixed"
+        if self.mixed:
+            self.system_space = mixed_space(mesh, k, "DPC", 1)
+            self.solution = dolfinx.fem.Function(self.system_space)
+            self.V, self._velocity_dofs = self.system_space.sub(0).collapse()
+            pressure_space, self._pressure_dofs = self.system_space.sub(1).collapse()
+            self.pressure = dolfinx.fem.Function(pressure_space, name="pressure")
+            self.u = dolfinx.fem.Function(self.V, name="velocity")
+        else:
+            self.V = self.system_space = function_space(mesh, "P", k, (2,))
+            self.u = self.solution = dolfinx.fem.Function(self.V, name="velocity")
         self.u_state = dolfinx.fem.Function(self.V)
         self.u_friction = dolfinx.fem.Function(self.V)
 
         self.full_degree = quadrature_degree(k, reduced=False)
-        reduced = scene.discretisation.volumetric_integration == "reduced"
+        reduced = scene.discretisation.volumetric_integration == "reduced" and not self.mixed
         self.volumetric_degree = quadrature_degree(k, reduced)
         self.dx = ufl.dx(domain=mesh, metadata={"quadrature_degree": self.full_degree})
         self.dx_vol = ufl.dx(domain=mesh, metadata={"quadrature_degree": self.volumetric_degree})
@@ -100,13 +110,23 @@ class FlowProblem:
                 scene.solver.petsc_options)
         self.bcs = self._boundary_conditions()
 
-        du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        self.a_ufl = self._bilinear(du, v)
-        self.a = dolfinx.fem.form(self.a_ufl)
+        if self.mixed:
+            (du, dp), (v, q) = ufl.split(ufl.TrialFunction(self.system_space)), ufl.split(
+                ufl.TestFunction(self.system_space))
+            self.a = dolfinx.fem.form(self._bilinear(du, v) - dp * ufl.div(v) * self.dx - q * ufl.div(du) * self.dx)
+        else:
+            du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+            self.a = dolfinx.fem.form(self._bilinear(du, v))
         self.L = dolfinx.fem.form(self._load(v)) if self.has_force else None
-        residual = ufl.action(self.a_ufl, self.u)
+        zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
+        self.system_vector = self.L or dolfinx.fem.form(ufl.inner(zero, v) * self.dx)
+        # the residual of the velocity equations at u (its values on constrained dofs are reactions)
+        v = ufl.TestFunction(self.V)
+        residual = ufl.action(self._bilinear(ufl.TrialFunction(self.V), v), self.u)
+        if self.mixed:
+            residual -= self.pressure * ufl.div(v) * self.dx
         if self.has_force:
-            residual = residual - self._load(v)
+            residual -= self._load(v)
         self.residual = dolfinx.fem.form(residual)
 
     # -- terms of b(w; u, v) and f(v) ---------------------------------------------------------
@@ -124,11 +144,27 @@ class FlowProblem:
         """Penalty incompressibility (1/d) int div u div v of (3.5), complete or reduced Gauss."""
         return 1.0 / self.scene.penalty.d * ufl.div(u) * ufl.div(v) * self.dx_vol
 
+    def hydrostatic_stress(self):
+        """sigma_H: div(u)/d of the penalty (3.4), or minus the pressure of the mixed formulation."""
+        return -self.pressure if self.mixed else ufl.div(self.u) / self.scene.penalty.d
+
     def stress(self):
-        """In-plane Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4) and sigma_H = div(u)/d (3.4)."""
+        """In-plane Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4)."""
         e = strain_rate(self.u)
-        return (2.0 / 3.0 * self.secant_coefficient() * deviatoric(e)
-                + ufl.div(self.u) / self.scene.penalty.d * ufl.Identity(2))
+        return 2.0 / 3.0 * self.secant_coefficient() * deviatoric(e) + self.hydrostatic_stress() * ufl.Identity(2)
+
+    def after_solve(self) -> None:
+        """Velocity (and pressure) from the solution of a linear system."""
+        self.solution.x.scatter_forward()
+        if self.mixed:
+            self.u.x.array[:] = self.solution.x.array[self._velocity_dofs]
+            self.pressure.x.array[:] = self.solution.x.array[self._pressure_dofs]
+
+    @property
+    def unknowns(self) -> int:
+        """Global number of unknowns of the linear systems."""
+        index_map = self.system_space.dofmap.index_map
+        return index_map.size_global * self.system_space.dofmap.index_map_bs
 
     @property
     def ds_contact(self):
@@ -146,7 +182,10 @@ class FlowProblem:
         return friction.slip_coefficient(tau_f, self.u_state, self.n, self.scene.friction.d_T)
 
     def _bilinear(self, u, v):
-        form = self.viscous_form(u, v) + self.volumetric_form(u, v)
+        """b(w; u, v) of (3.5); the mixed formulation adds its pressure terms instead of the penalty."""
+        form = self.viscous_form(u, v)
+        if not self.mixed:
+            form += self.volumetric_form(u, v)
         if self.has_contact:
             form += contact.contact_form(u, v, self.u_state, self.n, self.scene.penalty.d_N, self.ds_contact)
         if self.has_friction:
@@ -235,8 +274,11 @@ class FlowProblem:
 
     def _boundary_conditions(self) -> list:
         """The mesh's constraints: u_N = u_N^0 on Gamma1 (2.5) and u_N = 0 on Gamma6 (2.8)."""
-        return [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value), self.boundary_dofs(c.role, c.component),
-                                        self.V.sub(c.component)) for c in self.constraints]
+        velocity = self.system_space.sub(0) if self.mixed else self.V
+        fdim = self.mesh.topology.dim - 1
+        return [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value), dolfinx.fem.locate_dofs_topological(
+            velocity.sub(c.component), fdim, self.role_facets(c.role)), velocity.sub(c.component))
+            for c in self.constraints]
 
     # -- secant state ---------------------------------------------------------------------------
     def set_uniform_secant(self, rate: float) -> None:

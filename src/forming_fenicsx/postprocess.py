@@ -27,9 +27,6 @@ def _integrate(problem: FlowProblem, integrand) -> float:
     return problem.comm.allreduce(local)
 
 
-def hydrostatic_pressure(problem: FlowProblem):
-    """sigma_H = div(u)/d of (3.4), as UFL."""
-    return ufl.div(problem.u) / problem.scene.penalty.d
 
 
 def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
@@ -77,7 +74,7 @@ def mean_hydrostatic_pressure(problem: FlowProblem) -> float:
     The elements along Gamma1 lie in the rigid zone at the ram, where sigma_H is close to the
     ram pressure; the mean uses the volumetric term's own quadrature.
     """
-    pressure = cell_means(problem, -hydrostatic_pressure(problem), "pressure", problem.volumetric_degree)
+    pressure = cell_means(problem, -problem.hydrostatic_stress(), "pressure", problem.volumetric_degree)
     ds = problem.ds(ROLES["gamma1_velocity"])
     return _integrate(problem, pressure * ds) / _integrate(problem, 1.0 * ds)
 
@@ -177,6 +174,17 @@ def relative_divergence(problem: FlowProblem) -> float:
     return float(np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol) / deformation))
 
 
+def discrete_divergence(problem: FlowProblem) -> float:
+    """|(q, div u)| over the pressure basis functions q (Euclidean norm): the incompressibility the mixed
+    formulation imposes exactly (zero up to the linear solve), while ||div u|| itself is not zero."""
+    q = ufl.TestFunction(problem.pressure.function_space)
+    vector = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(q * ufl.div(problem.u) * problem.dx))
+    vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    value = vector.norm()
+    vector.destroy()
+    return value
+
+
 def scalars(problem: FlowProblem) -> dict[str, float]:
     """The summary numbers of a run: process force and pressure, die forces and the x force balance.
 
@@ -200,6 +208,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "force_balance_residual": residual,
         "divergence_l2": np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)),
         "relative_divergence": relative_divergence(problem),
+        **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
         "free_surface_crossing": free_surface_crossing(problem),
     }
 
@@ -218,7 +227,7 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
         velocity.interpolate(problem.u)
     sources = {
         "equivalent_strain_rate": (equivalent_strain_rate(problem.u), problem.full_degree),
-        "hydrostatic_pressure": (hydrostatic_pressure(problem), problem.volumetric_degree),
+        "hydrostatic_pressure": (problem.hydrostatic_stress(), problem.volumetric_degree),
         "secant_viscosity": (problem.secant_coefficient(), problem.full_degree),
     }
     fields = [velocity]

@@ -47,7 +47,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "scene": scene.to_dict(),
         "dolfinx_version": dolfinx.__version__,
         "mpi_ranks": comm.size,
-        "dofs": problem.V.dofmap.index_map.size_global * problem.V.dofmap.index_map_bs,
+        "dofs": problem.unknowns,
         "converged": result.converged,
         "reason": result.reason,
         "linear_solves": result.linear_solves,
@@ -83,7 +83,7 @@ def warnings(summary: dict[str, Any], scene: Scene) -> list[str]:
     linear solves whose estimated error approaches the tolerance, a drawing stress the drawn strip
     cannot carry."""
     found = []
-    if summary["relative_divergence"] > COMPRESSIBLE:
+    if scene.discretisation.formulation == "penalty" and summary["relative_divergence"] > COMPRESSIBLE:
         found.append(f"penalty.d = {scene.penalty.d:g} lets the material compress: ||div u||/||e(u)|| = "
                      f"{summary['relative_divergence']:.2g} (above {COMPRESSIBLE:g}); the results are those of a "
                      "compressible material: use a smaller penalty.d (Theorem 3.1: the error falls like O(d))")

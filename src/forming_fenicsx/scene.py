@@ -179,17 +179,20 @@ class Penalty:
 
 @dataclass
 class Discretisation:
-    """Element, quadrature of the volumetric term, mesh size and grading toward the die corner."""
+    """Element, incompressibility (penalty (3.5) with complete or reduced quadrature of the volumetric
+    term, or a mixed velocity-pressure formulation: Q2 velocity with discontinuous P1 pressure, the
+    limit d -> 0 of Theorem 3.1), mesh size and grading toward the die corner."""
 
     element: str = "Q2"
     volumetric_integration: str = "reduced"
     mesh_size: float = 0.5
     corner_grading: float = 4.0
     averaging: str = "nodes"
+    formulation: str = "penalty"
 
     def check(self) -> None:
         choices = {"element": ("Q1", "Q2"), "volumetric_integration": ("reduced", "complete"),
-                   "averaging": ("nodes", "centres", "quadrature")}
+                   "averaging": ("nodes", "centres", "quadrature"), "formulation": ("penalty", "mixed")}
         for key, allowed in choices.items():
             if getattr(self, key) not in allowed:
                 raise SceneError(f"discretisation.{key}",
@@ -308,6 +311,12 @@ class Scene:
         if self.solver.method == "newton" and self.discretisation.averaging != "quadrature":
             raise SceneError("solver.method", 'newton differentiates G at the integration points: it needs '
                              f'discretisation.averaging = "quadrature"; got {self.discretisation.averaging!r}')
+        if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
+            raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with discontinuous P1 "
+                             f'pressure: it needs discretisation.element = "Q2"; got {self.discretisation.element!r}')
+        if self.discretisation.formulation == "mixed" and self.solver.method == "newton":
+            raise SceneError("solver.method", 'newton is built for the penalty formulation; with '
+                             'discretisation.formulation = "mixed" use the direct or modified method')
         if self.discretisation.mesh_size > self.geometry.thinnest:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "

@@ -35,7 +35,7 @@ class LinearSolver:
         self.problem = problem
         self.a = bilinear if bilinear is not None else problem.a
         self.A = dolfinx.fem.petsc.create_matrix(self.a)
-        self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.residual)
+        self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.system_vector)
         self.ksp = PETSc.KSP().create(problem.comm)
         prefix = f"forming_{next(_prefixes)}_"
         self.ksp.setOptionsPrefix(prefix)
@@ -59,7 +59,7 @@ class LinearSolver:
         self.timings.assembly += time.perf_counter() - start
 
     def solve(self) -> None:
-        """Assemble K and F at the problem's current state and solve into problem.u."""
+        """Assemble K and F at the problem's current state and solve for problem.u (and the pressure)."""
         problem = self.problem
         self.assemble_matrix()
         start = time.perf_counter()
@@ -71,8 +71,8 @@ class LinearSolver:
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, problem.bcs)
         self.timings.assembly += time.perf_counter() - start
-        self.solve_system(petsc_vec(problem.u))
-        problem.u.x.scatter_forward()
+        self.solve_system(petsc_vec(problem.solution))
+        problem.after_solve()
 
     def solve_system(self, x: PETSc.Vec) -> None:
         """x = A^-1 b with the assembled A and b (the factorisation, in PCSetUp, timed apart from the
