@@ -41,7 +41,8 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     scene_file, quantity, settings = EXAMPLES[case["example"]]
     scene = load_scene(Path(case.get("demos", DEMOS)) / scene_file, [
         *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
-        f"solver.method={case['method']}", "solver.max_iterations=1000", "output.fields=false",
+        f"solver.method={case['method']}", f"discretisation.formulation={case.get('formulation', 'penalty')}",
+        "solver.max_iterations=1000", "output.fields=false",
         "output.figures=false", *case.get("set", [])])
     summary = solve_scene(scene)[2]
     comm = MPI.COMM_WORLD
@@ -77,11 +78,13 @@ def compare(rows: list[dict[str, Any]]) -> None:
     for row in rows:
         row["error"] = abs(row["value"] / row["exact"] - 1) if row.get("exact") else None
         direct = next((r for r in rows if r["method"] == "direct" and r["example"] == row["example"]
-                       and r["mesh_size"] == row["mesh_size"] and r["ranks"] == row["ranks"]), None)
+                       and r["mesh_size"] == row["mesh_size"] and r["ranks"] == row["ranks"]
+                       and r.get("formulation") == row.get("formulation")), None)
         row["vs_direct"] = abs(row["value"] / direct["value"] - 1) if direct else None
         row["speedup_vs_direct"] = direct["wall_time_s"] / row["wall_time_s"] if direct else None
         serial = next((r for r in rows if r["ranks"] == 1 and r["method"] == row["method"]
-                       and r["example"] == row["example"] and r["mesh_size"] == row["mesh_size"]), None)
+                       and r["example"] == row["example"] and r["mesh_size"] == row["mesh_size"]
+                       and r.get("formulation") == row.get("formulation")), None)
         row["speedup_vs_1_rank"] = serial["wall_time_s"] / row["wall_time_s"] if serial else None
 
 
@@ -90,10 +93,10 @@ def table(rows: list[dict[str, Any]]) -> str:
         return format(value, fmt) if value is not None else ""
 
     return markdown_table("forming bench", [
-        "example", "h", "ranks", "method", "dofs", "linear solves", "wall s", "setup s", "assembly s",
+        "example", "h", "ranks", "formulation", "method", "dofs", "linear solves", "wall s", "setup s", "assembly s",
         "factorisation s", "solve s", "rest s", "outside/inside per solve", "peak MB", "quantity", "error",
         "vs direct", "speed-up vs direct", "speed-up vs 1 rank"],
-        [[r["example"], r["mesh_size"], r["ranks"], r["method"], r["dofs"], r["linear_solves"],
+        [[r["example"], r["mesh_size"], r["ranks"], r.get("formulation", "penalty"), r["method"], r["dofs"], r["linear_solves"],
           f"{r['wall_time_s']:.2f}", f"{r['setup_s']:.2f}", f"{r['assembly_s']:.2f}",
           f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}", f"{r['rest_s']:.2f}",
           f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}", f"{r['peak_memory_mb']:.0f}",
@@ -107,6 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--examples", type=int, nargs="+", default=[1, 2], choices=sorted(EXAMPLES))
     parser.add_argument("--sizes", type=float, nargs="+", help="mesh sizes (default: two per example)")
     parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    parser.add_argument("--formulations", nargs="+", default=["penalty"], choices=["penalty", "mixed"],
+                        help="incompressibility by penalty and/or the mixed formulation (not with newton)")
     parser.add_argument("--ranks", type=int, nargs="+", default=[1], help="MPI ranks of each case (e.g. 1 2)")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                         help="override a scene value in every case")
@@ -126,11 +131,15 @@ def main(argv: list[str] | None = None) -> int:
     for example in args.examples:
         for size in args.sizes or DEFAULT_SIZES[example]:
             for ranks in args.ranks:
-                for method in args.methods:
-                    case = {"example": example, "mesh_size": size, "method": method, "set": args.set}
-                    rows.append(_launch(case, ranks))
-                    print(f"example {example}, h = {size}, {ranks} rank(s), {method}: {rows[-1]['linear_solves']} "
-                          f"solves, {rows[-1]['wall_time_s']:.2f} s", flush=True)
+                for formulation in args.formulations:
+                    for method in args.methods:
+                        if formulation == "mixed" and method == "newton":
+                            continue  # Newton is built for the penalty formulation
+                        case = {"example": example, "mesh_size": size, "method": method,
+                                "formulation": formulation, "set": args.set}
+                        rows.append(_launch(case, ranks))
+                        print(f"example {example}, h = {size}, {ranks} rank(s), {formulation}, {method}: "
+                              f"{rows[-1]['linear_solves']} solves, {rows[-1]['wall_time_s']:.2f} s", flush=True)
     compare(rows)
     print(table(rows))
     out = Path(args.out)
