@@ -34,6 +34,7 @@ def test_study_against_hill_and_resumption(shared_tmp, monkeypatch):
     errors = [float(r["relative_error"]) for r in rows if r["solver.method"] == "direct"]
     assert errors[0] > errors[1] > errors[2]
     assert (out / "pareto.png").read_bytes()[:4] == b"\x89PNG"
+    assert "| error within | cheapest setting |" in (out / "study.md").read_text()
     # started again: every run is in study.json, nothing is solved
     calls = []
     monkeypatch.setattr(study, "solve_scene", lambda *a, **k: calls.append(a) or pytest.fail("solved again"))
@@ -93,3 +94,16 @@ def test_bad_study_file_names_the_key(shared_tmp, text, key):
     with pytest.raises(SceneError) as error:
         study.load_study(path)
     assert error.value.key == key
+
+
+def test_cheapest_setting_per_error_level():
+    rows = [{"settings": {"a.b": str(i)}, "converged": True, "relative_error": e, "wall_time_s": t,
+             "reference_kind": "exact", "x": 1.0, "linear_solves": 1, "dofs": 10}
+            for i, (e, t) in enumerate([(0.2, 1.0), (0.05, 3.0), (0.02, 2.0), (0.005, 9.0)])]
+    found = study.cheapest(rows)
+    assert [f["run"]["settings"]["a.b"] for f in found] == ["2", "2", "3"]
+    assert study.cheapest(rows[:1])[0]["run"] is None
+    text = study.report(rows, "x")
+    assert "| 3 % | b = 2 | 2.00% | 2.00 | 1 | 10 |" in text
+    order = [line.split(" | ")[0] for line in text.splitlines()[2:6]]
+    assert order == ["| 0", "| 2", "| 1", "| 3"]  # sorted by wall time

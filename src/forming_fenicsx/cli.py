@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             out = Path(args.out) if args.out else Path("results") / (stem if _is_study(args.scene) else f"{stem}_study")
             rows = run_study(data, vary + args.vary, out, args.quantity or quantity, comm)
             if comm.rank == 0:
-                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; {out}/study.csv")
+                print((out / "study.md").read_text())
+                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; {out}/study.csv, study.md")
             return 0
         scene = load_scene(args.scene, args.set)
         petsc_options = petsc_options_from_args(petsc_args)

@@ -149,7 +149,41 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | 
         store.write_text(json.dumps({"quantity": quantity, "runs": ordered}, indent=1, default=str))
         _write_csv(out / "study.csv", ordered, quantity, [k for k, _ in grid])
         _pareto_plot(out / "pareto.png", ordered, quantity, [k for k, _ in grid])
+        (out / "study.md").write_text(report(ordered, quantity) + "\n")
     return ordered
+
+
+ERROR_LEVELS = (0.10, 0.03, 0.01)
+
+
+def cheapest(rows: list[dict[str, Any]], levels: tuple[float, ...] = ERROR_LEVELS) -> list[dict[str, Any]]:
+    """For each error level, the converged run of least wall time whose relative error is within it
+    (None where no run reaches the level)."""
+    found = []
+    for level in levels:
+        within = [r for r in rows if r.get("converged") and math.isfinite(r.get("relative_error", math.nan))
+                  and r["relative_error"] <= level]
+        found.append({"level": level, "run": min(within, key=lambda r: r["wall_time_s"]) if within else None})
+    return found
+
+
+def report(rows: list[dict[str, Any]], quantity: str) -> str:
+    """Markdown: every run sorted by wall time, then the cheapest setting for each error level."""
+    keys = list(rows[0]["settings"]) if rows else []
+    lines = [f"| {' | '.join(keys)} | {quantity} | error | reference | wall s | linear solves | dofs |",
+             "|" + "---|" * (len(keys) + 6)]
+    for r in sorted(rows, key=lambda r: r["wall_time_s"]):
+        lines.append(f"| {' | '.join(str(r['settings'][k]) for k in keys)} | {r[quantity]:.5g} | "
+                     f"{100 * r['relative_error']:.2f}% | {r['reference_kind']} | {r['wall_time_s']:.2f} | "
+                     f"{r['linear_solves']} | {r['dofs']} |")
+    lines += ["", "| error within | cheapest setting | error | wall s | linear solves | dofs |", "|---|---|---|---|---|---|"]
+    for entry in cheapest(rows):
+        r = entry["run"]
+        setting = ", ".join(f"{k.split('.')[-1]} = {v}" for k, v in r["settings"].items()) if r else "none reaches it"
+        lines.append(f"| {100 * entry['level']:g} % | {setting} | " + (
+            f"{100 * r['relative_error']:.2f}% | {r['wall_time_s']:.2f} | {r['linear_solves']} | {r['dofs']} |"
+            if r else " |  |  |  |"))
+    return "\n".join(lines)
 
 
 def _write_csv(path: Path, rows: list[dict[str, Any]], quantity: str, keys: list[str]) -> None:
