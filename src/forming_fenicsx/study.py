@@ -205,10 +205,11 @@ def _pareto_plot(path: Path, rows: list[dict[str, Any]], quantity: str, keys: li
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = plt.subplots(figsize=(9, 5))
     series: dict[str, list[tuple[float, float]]] = {}
+    others = [k for k in keys if k != "discretisation.mesh_size"]
     for row in rows:
-        label = ", ".join(f"{k}={row['settings'][k]}" for k in keys if k != "discretisation.mesh_size") or quantity
+        label = ", ".join(str(row["settings"][k]) for k in others) or quantity
         if math.isfinite(row["relative_error"]) and row["relative_error"] > 0:
             series.setdefault(label, []).append((row["wall_time_s"], row["relative_error"]))
     for marker, (label, points) in zip(itertools.cycle("osD^v<>p*"), series.items()):
@@ -217,7 +218,8 @@ def _pareto_plot(path: Path, rows: list[dict[str, Any]], quantity: str, keys: li
     ax.set_ylabel(f"relative error of {quantity}")
     ax.grid(True, which="both", alpha=0.3)
     if series:
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, title=", ".join(k.split(".")[-1] for k in others) or None, title_fontsize=8,
+                  loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
