@@ -106,4 +106,5 @@ def test_cheapest_setting_per_error_level():
     text = study.report(rows, "x")
     assert "| 3 % | b = 2 | 2.00% | 2.00 | 1 | 10 |" in text
     order = [line.split(" | ")[0] for line in text.splitlines()[2:6]]
+    assert all(" | yes | " in line for line in text.splitlines()[2:6])
     assert order == ["| 0", "| 2", "| 1", "| 3"]  # sorted by wall time

@@ -168,14 +168,15 @@ def cheapest(rows: list[dict[str, Any]], levels: tuple[float, ...] = ERROR_LEVEL
 
 
 def report(rows: list[dict[str, Any]], quantity: str) -> str:
-    """Markdown: every run sorted by wall time, then the cheapest setting for each error level."""
+    """Markdown: every run sorted by wall time (with whether it converged), then the cheapest converged
+    setting for each error level."""
     keys = list(rows[0]["settings"]) if rows else []
-    lines = [f"| {' | '.join(keys)} | {quantity} | error | reference | wall s | linear solves | dofs |",
-             "|" + "---|" * (len(keys) + 6)]
+    lines = [f"| {' | '.join(keys)} | {quantity} | error | reference | converged | wall s | linear solves | dofs |",
+             "|" + "---|" * (len(keys) + 7)]
     for r in sorted(rows, key=lambda r: r["wall_time_s"]):
         lines.append(f"| {' | '.join(str(r['settings'][k]) for k in keys)} | {r[quantity]:.5g} | "
-                     f"{100 * r['relative_error']:.2f}% | {r['reference_kind']} | {r['wall_time_s']:.2f} | "
-                     f"{r['linear_solves']} | {r['dofs']} |")
+                     f"{100 * r['relative_error']:.2f}% | {r['reference_kind']} | {'yes' if r['converged'] else 'no'} | "
+                     f"{r['wall_time_s']:.2f} | {r['linear_solves']} | {r['dofs']} |")
     lines += ["", "| error within | cheapest setting | error | wall s | linear solves | dofs |", "|---|---|---|---|---|---|"]
     for entry in cheapest(rows):
         r = entry["run"]
