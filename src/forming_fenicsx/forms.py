@@ -113,10 +113,11 @@ class FlowProblem:
         if self.mixed:
             (du, dp), (v, q) = ufl.split(ufl.TrialFunction(self.system_space)), ufl.split(
                 ufl.TestFunction(self.system_space))
-            self.a = dolfinx.fem.form(self._bilinear(du, v) - dp * ufl.div(v) * self.dx - q * ufl.div(du) * self.dx)
+            self.a_ufl = self._bilinear(du, v) - dp * ufl.div(v) * self.dx - q * ufl.div(du) * self.dx
         else:
             du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-            self.a = dolfinx.fem.form(self._bilinear(du, v))
+            self.a_ufl = self._bilinear(du, v)
+        self.a = dolfinx.fem.form(self.a_ufl)
         self.L = dolfinx.fem.form(self._load(v)) if self.has_force else None
         zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
         self.system_vector = self.L or dolfinx.fem.form(ufl.inner(zero, v) * self.dx)
