@@ -57,7 +57,8 @@ class NewtonSolver(SecantSolver):
         with b.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.forms.residual)
-        dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], bcs=[self.problem.bcs], x0=[u], scale=-1.0)
+        dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], [self.problem.bcs], [u], -1.0)  # positional:
+        # the keyword is scale in dolfinx 0.5 and alpha in 0.9
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(b, self.problem.bcs, u, -1.0)
         self.newton.timings.assembly += time.perf_counter() - start
