@@ -205,6 +205,8 @@ class FlowProblem:
         Phi(u) = int W(rate(u)) + 1/(2d) (div u)^2 + int_G3 1/(2 d_N) (u_N^+)^2 + j_dT(u_friction; u) - f(u)
         with W' = sigma_p, so F(u; v) = int tau(u):e(v) + ... is the Euler equation of (3.10)-(3.12) whose
         fixed point the secant methods (3.13)/(3.33) find, tau(u) = 2/3 G(rate) e'(u) the deviatoric stress.
+        The mixed formulation drops the penalty from Phi and adds -(p, div v) - (q, div u) to F; its
+        iterates keep (q, div u) = 0, on which Phi is still the merit function of the line search.
 
         The operator linearises tau = tau(u) with a separate dual iterate tau_h at the Gauss points
         (primal-dual Newton, as for total-variation problems): d tau = 2/3 G e'(du) + (G'/G) d rate tau_h.
@@ -216,10 +218,15 @@ class FlowProblem:
         nonlocal averaged normal stress is not differentiated). The rate is regularised as
         sqrt(rate^2 + (1e-6 rate1)^2) so that everything stays finite in rigid zones.
         """
-        u, scene, material = self.u, self.scene, self.scene.material
-        v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
-        step = dolfinx.fem.Function(self.V)          # du of the last Newton solve (u <- u - s du)
-        previous = dolfinx.fem.Function(self.V)      # u before that step
+        scene, material, w = self.scene, self.scene.material, self.solution
+        test, trial = ufl.TestFunction(self.system_space), ufl.TrialFunction(self.system_space)
+        step = dolfinx.fem.Function(self.system_space)      # the last Newton solve's dw (w <- w - s dw)
+        previous = dolfinx.fem.Function(self.system_space)  # w before that step
+        if self.mixed:  # w = (u, p): the pressure terms replace the penalty
+            (u, p), (v, q), (du, dp) = ufl.split(w), ufl.split(test), ufl.split(trial)
+            u_previous, u_step = ufl.split(previous)[0], ufl.split(step)[0]
+        else:
+            u, v, du, u_previous, u_step = w, test, trial, previous, step
         dual = dolfinx.fem.Function(quadrature_space(self.mesh, self.full_degree, (2, 2)), name="dual_stress")
         floor = 1e-6 * material.rate_floor
 
@@ -237,8 +244,13 @@ class FlowProblem:
             d_rate = 2.0 / 3.0 * deviatoric_product(strain_rate(w), strain_rate(dw)) / r
             return 2.0 / 3.0 * g * deviatoric(strain_rate(dw)) + ufl.diff(g, r) / g * d_rate * tau
 
-        energy = material.potential_ufl(rate(u)) * self.dx + 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
-        operator = ufl.inner(stress_change(u, du, dual), strain_rate(v)) * self.dx + self.volumetric_form(du, v)
+        energy = material.potential_ufl(rate(u)) * self.dx
+        operator = ufl.inner(stress_change(u, du, dual), strain_rate(v)) * self.dx
+        if self.mixed:
+            operator -= (dp * ufl.div(v) + q * ufl.div(du)) * self.dx
+        else:
+            energy += 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
+            operator += self.volumetric_form(du, v)
         if self.has_contact:
             energy += 0.5 / scene.penalty.d_N * ufl.max_value(contact.normal_velocity(u, self.n), 0.0) ** 2 \
                 * self.ds_contact
@@ -247,14 +259,18 @@ class FlowProblem:
             tau_f = friction.friction_bound(scene.friction.mu, self.normal_pressure())
             energy += tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact
         if self.has_force:
-            energy -= ufl.action(self._load(v), u)
-        residual = ufl.derivative(energy, u, v)
-        boundary = residual - ufl.inner(stress(u), strain_rate(v)) * self.dx - self.volumetric_form(u, v)
+            energy -= ufl.action(self._load(v), w)
+        residual = ufl.derivative(energy, w, test)
+        boundary = residual - ufl.inner(stress(u), strain_rate(v)) * self.dx
+        if self.mixed:  # the energy (no pressure) stays a merit function: every step keeps (q, div u) = 0
+            residual -= (p * ufl.div(v) + q * ufl.div(u)) * self.dx
+        else:
+            boundary -= self.volumetric_form(u, v)
         if self.has_contact or self.has_friction:
-            operator += ufl.derivative(boundary, u, du)
+            operator += ufl.derivative(boundary, w, trial)
         # the full dual Newton step tau(u) - d tau(du) at the old u (whatever primal step the line search
         # took), capped at the flow stress of the new u: the projection of primal-dual Newton methods
-        updated = stress(previous) - stress_change(previous, step, dual)
+        updated = stress(u_previous) - stress_change(u_previous, u_step, dual)
         equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
         cap = material.secant_ufl(rate(u)) * rate(u)
         capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated

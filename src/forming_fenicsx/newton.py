@@ -33,8 +33,9 @@ class NewtonSolver(SecantSolver):
         self.forms = problem.newton_forms()
         self.newton = LinearSolver(problem, {**self.settings.petsc_options, **(petsc_options or {})},
                                    bilinear=self.forms.operator, linear=self.forms.residual)
-        self._du = petsc_vec(problem.u).duplicate()
-        self._trial = petsc_vec(problem.u).duplicate()
+        self._du = petsc_vec(problem.solution).duplicate()
+        self._trial = petsc_vec(problem.solution).duplicate()
+        self._velocity = problem.u.copy()
 
     def destroy(self) -> None:
         super().destroy()
@@ -53,7 +54,7 @@ class NewtonSolver(SecantSolver):
     def assemble_residual(self) -> PETSc.Vec:
         """F(u) into the Newton right-hand side, the Dirichlet rows holding u - g (zero once u meets them)."""
         start = time.perf_counter()
-        b, u = self.newton.b, petsc_vec(self.problem.u)
+        b, u = self.newton.b, petsc_vec(self.problem.solution)
         with b.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.forms.residual)
@@ -67,7 +68,7 @@ class NewtonSolver(SecantSolver):
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
         """Solve J du = F at u, then u <- u - s du with the largest s = 2^-j that lowers Phi by at least
         ARMIJO * s * F.du. Returns the relative full step ||du||/||u|| (NaN after a failed solve)."""
-        problem, u, du = self.problem, petsc_vec(self.problem.u), self._du
+        problem, u, du = self.problem, petsc_vec(self.problem.solution), self._du
         problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
         residual = self.assemble_residual().norm()
         self.newton.assemble_matrix()
@@ -79,7 +80,7 @@ class NewtonSolver(SecantSolver):
             return math.nan
         result.linear_solves += 1
         solve_error = self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
-        slope = self.newton.b.dot(du)  # F.du > 0 when -du is a descent direction of Phi
+        slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms = self.forms
         du.copy(petsc_vec(forms.step))
@@ -87,18 +88,23 @@ class NewtonSolver(SecantSolver):
         u.copy(petsc_vec(forms.previous))
         forms.previous.x.scatter_forward()
         u.copy(self._trial)
+        petsc_vec(problem.u).copy(petsc_vec(self._velocity))
         step = 1.0
         for _ in range(MAX_HALVINGS + 1):
             self._trial.copy(u)
             u.axpy(-step, du)
-            problem.u.x.scatter_forward()
+            problem.after_solve()
             if self.energy_value() <= energy0 - ARMIJO * step * slope:
                 break
             step *= 0.5
-        increment = du.norm() / u.norm() if u.norm() > 0 else math.inf
+        # the full step's velocity part relative to the new velocity: the rule of (4.4)
+        change = petsc_vec(self._velocity)
+        change.axpy(-1.0, petsc_vec(problem.u))
+        norm = petsc_vec(problem.u).norm()
+        increment = change.norm() / (step * norm) if norm > 0 else math.inf
         if not math.isfinite(increment):
             self._trial.copy(u)
-            problem.u.x.scatter_forward()
+            problem.after_solve()
         else:
             set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
         record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step)

@@ -212,7 +212,8 @@ class Discretisation:
 @dataclass
 class Solver:
     """Nonlinear iteration: the secant-modulus methods direct (3.13) or modified (3.33), or Newton's
-    method after ``secant_start`` direct iterates (newton.py); all stopped by the rule of (4.4).
+    method after ``secant_start`` direct iterates (newton.py, both formulations); all stopped by the rule
+    of (4.4).
 
     ``stall_window``: inner iterations (a fifth of it for outer ones) without a new smallest increment
     after which the run stops as stalled or oscillating. ``force_tolerance`` (0: off, as in the
@@ -314,9 +315,6 @@ class Scene:
         if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
             raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with discontinuous P1 "
                              f'pressure: it needs discretisation.element = "Q2"; got {self.discretisation.element!r}')
-        if self.discretisation.formulation == "mixed" and self.solver.method == "newton":
-            raise SceneError("solver.method", 'newton is built for the penalty formulation; with '
-                             'discretisation.formulation = "mixed" use the direct or modified method')
         if self.discretisation.mesh_size > self.geometry.thinnest:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
