@@ -108,7 +108,7 @@ penalties = [("d", d) for d in (5e-3, 5e-4, 5e-5, 5e-6)] + [("d_N", d) for d in 
 for key, value in penalties if "penalty" in args.parts else []:
     s = run(f"discretisation.mesh_size={size}", *ELEMENTS["Q2 reduced"], *CONVERGED, f"penalty.{key}={value}")
     results["penalty"].append({"penalty": key, "value": value, **s})
-table(f"The penalties (mu = 0, Q2 reduced, h = {size})", ["penalty", "value", "q_av", "drawing stress", "||div u||"],
+table(f"The penalties (mu = 0, Q2 reduced, h = {size})", ["penalty", "value", "q_av", "drawing stress", "L2 norm of div u"],
       [[r["penalty"], r["value"], r["mean_die_pressure"], r["drawing_stress"], r["divergence_l2"]]
        for r in results["penalty"]])
 

@@ -80,7 +80,7 @@ def main() -> None:
     if rank0:
         print(markdown_table(
             "Mixed against penalty (the penalty limit d -> 0 extrapolated from the three smallest d)",
-            ["case", "formulation", "d", "quantity", "value", "vs penalty limit", "||div u||", "p_av",
+            ["case", "formulation", "d", "quantity", "value", "vs penalty limit", "L2 norm of div u", "p_av",
              "pressure field vs mixed", "linear solves", "dofs"],
             [[r["case"], r["formulation"], r["d"], r["quantity"], r["value"], f"{100 * r['vs_penalty_limit']:+.3f}%",
               f"{r['divergence_l2']:.2e}", r.get("mean_hydrostatic_pressure", ""), f"{r['field_difference']:.2e}",
