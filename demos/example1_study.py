@@ -67,7 +67,7 @@ for d in args.penalties if "penalty" in args.parts else []:
     model = ram_face_pressure_model(law, d, s["ram_pressure"])
     results["penalty"].append({"d": d, "rigid_zone_model": model, **s})
 table("p_av on the ram face against d (h = 0.25)",
-      ["d", "ram pressure", "p_av", "rigid-zone model of p_av", "||div u||", "linear solves"],
+      ["d", "ram pressure", "p_av", "rigid-zone model of p_av", "L2 norm of div u", "linear solves"],
       [[r["d"], r["ram_pressure"], r["mean_hydrostatic_pressure"], r["rigid_zone_model"], r["divergence_l2"],
         r["linear_solves"]] for r in results["penalty"]])
 
