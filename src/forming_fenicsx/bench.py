@@ -39,7 +39,7 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     from .study import exact_value
 
     scene_file, quantity, settings = EXAMPLES[case["example"]]
-    scene = load_scene(Path(case.get("demos", DEMOS)) / scene_file, [
+    scene = load_scene(DEMOS / scene_file, [
         *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
         f"solver.method={case['method']}", f"discretisation.formulation={case.get('formulation', 'penalty')}",
         "solver.max_iterations=1000", "output.fields=false",
@@ -73,18 +73,20 @@ def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
     return json.loads(rows[-1])
 
 
+def _counterpart(rows: list[dict[str, Any]], row: dict[str, Any], **changed: Any) -> dict[str, Any] | None:
+    """The row of the same case as ``row`` but for the ``changed`` keys (e.g. method="direct")."""
+    wanted = {key: row.get(key) for key in ("example", "mesh_size", "ranks", "method", "formulation")} | changed
+    return next((r for r in rows if all(r.get(key) == value for key, value in wanted.items())), None)
+
+
 def compare(rows: list[dict[str, Any]]) -> None:
     """Add the error against the exact value and the difference from the direct method (in place)."""
     for row in rows:
         row["error"] = abs(row["value"] / row["exact"] - 1) if row.get("exact") else None
-        direct = next((r for r in rows if r["method"] == "direct" and r["example"] == row["example"]
-                       and r["mesh_size"] == row["mesh_size"] and r["ranks"] == row["ranks"]
-                       and r.get("formulation") == row.get("formulation")), None)
+        direct = _counterpart(rows, row, method="direct")
         row["vs_direct"] = abs(row["value"] / direct["value"] - 1) if direct else None
         row["speedup_vs_direct"] = direct["wall_time_s"] / row["wall_time_s"] if direct else None
-        serial = next((r for r in rows if r["ranks"] == 1 and r["method"] == row["method"]
-                       and r["example"] == row["example"] and r["mesh_size"] == row["mesh_size"]
-                       and r.get("formulation") == row.get("formulation")), None)
+        serial = _counterpart(rows, row, ranks=1)
         row["speedup_vs_1_rank"] = serial["wall_time_s"] / row["wall_time_s"] if serial else None
 
 

@@ -115,12 +115,13 @@ def main(argv: list[str] | None = None) -> int:
 
             configure_logging(args.quiet, comm.rank)
             logging.getLogger("forming_fenicsx.solvers").setLevel(logging.WARNING)  # one progress line per run
-            data, vary, quantity = load_study(args.scene, args.set) if _is_study(args.scene) else \
+            study_file = _is_study(args.scene)
+            data, vary, quantity = load_study(args.scene, args.set) if study_file else \
                 (read_scene_data(args.scene, args.set), [], None)
             if not vary + args.vary:
                 raise SceneError("--vary", "a study needs at least one --vary (or a study file)")
             stem = Path(args.scene).name.split(".")[0]
-            out = Path(args.out) if args.out else Path("results") / (stem if _is_study(args.scene) else f"{stem}_study")
+            out = Path(args.out) if args.out else Path("results") / (stem if study_file else f"{stem}_study")
             rows = run_study(data, vary + args.vary, out, args.quantity or quantity, comm)
             if comm.rank == 0:
                 print((out / "study.md").read_text())

@@ -33,15 +33,11 @@ class NewtonSolver(SecantSolver):
         self.forms = problem.newton_forms()
         self.newton = LinearSolver(problem, {**self.settings.petsc_options, **(petsc_options or {})},
                                    bilinear=self.forms.operator, linear=self.forms.residual)
-        self._du = petsc_vec(problem.solution).duplicate()
-        self._trial = petsc_vec(problem.solution).duplicate()
         self._velocity = problem.u.copy()
 
     def destroy(self) -> None:
         super().destroy()
         self.newton.destroy()
-        self._du.destroy()
-        self._trial.destroy()
 
     def energy_value(self) -> float:
         """Phi(u) at the current u (collective)."""
@@ -68,7 +64,9 @@ class NewtonSolver(SecantSolver):
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
         """Solve J du = F at u, then u <- u - s du with the largest s = 2^-j that lowers Phi by at least
         ARMIJO * s * F.du. Returns the relative full step ||du||/||u|| (NaN after a failed solve)."""
-        problem, u, du = self.problem, petsc_vec(self.problem.solution), self._du
+        forms = self.forms
+        problem, u = self.problem, petsc_vec(self.problem.solution)
+        du, previous = petsc_vec(forms.step), petsc_vec(forms.previous)  # the dual update reads both
         problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
         residual = self.assemble_residual().norm()
         self.newton.assemble_matrix()
@@ -82,16 +80,13 @@ class NewtonSolver(SecantSolver):
         solve_error = self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
-        forms = self.forms
-        du.copy(petsc_vec(forms.step))
         forms.step.x.scatter_forward()
-        u.copy(petsc_vec(forms.previous))
+        u.copy(previous)
         forms.previous.x.scatter_forward()
-        u.copy(self._trial)
         petsc_vec(problem.u).copy(petsc_vec(self._velocity))
         step = 1.0
         for _ in range(MAX_HALVINGS + 1):
-            self._trial.copy(u)
+            previous.copy(u)
             u.axpy(-step, du)
             problem.after_solve()
             if self.energy_value() <= energy0 - ARMIJO * step * slope:
@@ -103,7 +98,7 @@ class NewtonSolver(SecantSolver):
         norm = petsc_vec(problem.u).norm()
         increment = change.norm() / (step * norm) if norm > 0 else math.inf
         if not math.isfinite(increment):
-            self._trial.copy(u)
+            previous.copy(u)
             problem.after_solve()
         else:
             set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
@@ -111,7 +106,7 @@ class NewtonSolver(SecantSolver):
         result.history.append(record)
         if problem.comm.rank == 0:
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  (%.1f s)", inner, increment,
-                 residual, step, record.elapsed)
+                     residual, step, record.elapsed)
         return increment
 
     def timings(self) -> Timings:

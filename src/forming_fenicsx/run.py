@@ -92,7 +92,7 @@ def warnings(summary: dict[str, Any], scene: Scene) -> list[str]:
                      f"{summary['solve_error_estimate']:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; "
                      "use larger penalty parameters (penalty.d, penalty.d_N, friction.d_T)")
     if scene.process.kind == "drawing":
-        strength = 2 / math.sqrt(3) * float(scene.material.flow_stress([scene.reference_strain_rate])[0])
+        strength = 2 / math.sqrt(3) * scene.reference_flow_stress
         if summary["drawing_stress"] > strength:
             found.append(f"the drawing stress {summary['drawing_stress']:.4g} exceeds the plane-strain yield stress "
                          f"2k = {strength:.4g} of the drawn strip: it yields after the die, so no steady drawing "

@@ -332,6 +332,11 @@ class Scene:
         given = self.solver.reference_strain_rate
         return given if given is not None else self.process.velocity / self.geometry.entry_thickness
 
+    @property
+    def reference_flow_stress(self) -> float:
+        """sigma_p at the reference strain rate: the stress scale of the process."""
+        return float(self.material.flow_stress([self.reference_strain_rate])[0])
+
     def to_dict(self) -> dict[str, Any]:
         """Every resolved value, section by section."""
         return {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self)}

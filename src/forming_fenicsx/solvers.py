@@ -114,7 +114,7 @@ class LinearSolver:
 
 @dataclass
 class Timings:
-    """Seconds spent in assembly, in the factorisation (KSPSetUp) and in the solves (with the
+    """Seconds spent in assembly, in the factorisation (PCSetUp) and in the solves (with the
     iterative-refinement estimate) of a run's linear systems."""
 
     assembly: float = 0.0
@@ -274,7 +274,7 @@ class SecantSolver:
         moves the penalty normal stress u_N/d_N of (3.4), and with it the friction bound, by delta*U/d_N;
         when that exceeds the flow stress the iteration cannot resolve tau_f (measured on Example 2)."""
         scene = self.problem.scene
-        flow = float(scene.material.flow_stress([scene.reference_strain_rate])[0])
+        flow = scene.reference_flow_stress
         noise = self.settings.tolerance * abs(scene.process.velocity) / scene.penalty.d_N
         if noise < flow:
             return ""
