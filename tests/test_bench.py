@@ -30,7 +30,7 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
                                "1.0", "--methods", "direct", "newton", "--out", str(out)],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
-        assert "| example | h | ranks | formulation | method |" in done.stdout
+        assert "| example | h | ranks | formulation | method | converged |" in done.stdout
     MPI.COMM_WORLD.barrier()
     rows = {r["method"]: r for r in json.loads(out.read_text())}
     assert rows["newton"]["linear_solves"] < rows["direct"]["linear_solves"]

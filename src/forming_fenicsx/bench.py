@@ -95,10 +95,12 @@ def table(rows: list[dict[str, Any]]) -> str:
         return format(value, fmt) if value is not None else ""
 
     return markdown_table("forming bench", [
-        "example", "h", "ranks", "formulation", "method", "dofs", "linear solves", "wall s", "setup s", "assembly s",
+        "example", "h", "ranks", "formulation", "method", "converged", "dofs", "linear solves", "wall s", "setup s",
+        "assembly s",
         "factorisation s", "solve s", "rest s", "outside/inside per solve", "peak MB", "quantity", "error",
         "vs direct", "speed-up vs direct", "speed-up vs 1 rank"],
-        [[r["example"], r["mesh_size"], r["ranks"], r.get("formulation", "penalty"), r["method"], r["dofs"], r["linear_solves"],
+        [[r["example"], r["mesh_size"], r["ranks"], r.get("formulation", "penalty"), r["method"], r["converged"],
+          r["dofs"], r["linear_solves"],
           f"{r['wall_time_s']:.2f}", f"{r['setup_s']:.2f}", f"{r['assembly_s']:.2f}",
           f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}", f"{r['rest_s']:.2f}",
           f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}", f"{r['peak_memory_mb']:.0f}",
