@@ -149,12 +149,12 @@ def _edge_owners(triangles: np.ndarray) -> dict[tuple[int, int], list[tuple[int,
     return owners
 
 
-def _gradients(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """b, c with 2A dN_i/dx = b_i and 2A dN_i/dy = c_i for the linear shape functions, and 2A."""
+def _gradients(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """b, c with 2A dN_i/dx = b_i and 2A dN_i/dy = c_i for the linear shape functions of each triangle."""
     p = points[triangles]
     b = np.roll(p[:, :, 1], -1, axis=1) - np.roll(p[:, :, 1], -2, axis=1)
     c = np.roll(p[:, :, 0], -2, axis=1) - np.roll(p[:, :, 0], -1, axis=1)
-    return b, c, np.einsum("ti,ti->t", p[:, :, 0], b)
+    return b, c
 
 
 def _outward(points: np.ndarray, triangles: np.ndarray, owner: np.ndarray, edges: np.ndarray
@@ -200,7 +200,7 @@ def lower_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
     equal, upper = _Rows(), _Rows()
 
     # equilibrium in each triangle: div sigma = 0 with the constant gradients of the linear field
-    b, c, _ = _gradients(points, triangles)
+    b, c = _gradients(points, triangles)
     equal.add([var[:, i] + j for i in range(3) for j in (0, 2)], [b[:, i] if j == 0 else c[:, i]
                                                                for i in range(3) for j in (0, 2)])
     equal.add([var[:, i] + j for i in range(3) for j in (2, 1)], [b[:, i] if j == 2 else c[:, i]
@@ -269,7 +269,7 @@ def upper_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
     n_tri, n_pts = len(triangles), len(points)
     ux, uy, t = 2 * triangles, 2 * triangles + 1, 2 * n_pts + np.arange(n_tri)
     equal, upper = _Rows(), _Rows()
-    b, c, _ = _gradients(points, triangles)
+    b, c = _gradients(points, triangles)
     # incompressible in each triangle: 2A (e_xx + e_yy) = sum b_i u_i + c_i v_i = 0
     equal.add([ux[:, i] for i in range(3)] + [uy[:, i] for i in range(3)], [b[:, i] for i in range(3)] +
               [c[:, i] for i in range(3)])
