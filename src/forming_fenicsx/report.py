@@ -16,11 +16,13 @@ def richardson(values: list[float]) -> tuple[float, float]:
     return c - (b - c) / (2**order - 1), order
 
 
-def markdown_table(title: str, header: list[str], rows: list[list]) -> str:
-    """A titled markdown table; floats with five significant digits. Empty when there are no rows."""
+def markdown_table(title: str | None, header: list[str], rows: list[list]) -> str:
+    """A markdown table under a ``### title`` heading (none for None); floats with five significant
+    digits. Empty when there are no rows."""
     if not rows:
         return ""
-    lines = [f"\n### {title}\n", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    heading = [f"\n### {title}\n"] if title is not None else []
+    lines = [*heading, "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for row in rows:
         lines.append("| " + " | ".join(f"{v:.5g}" if isinstance(v, float) else str(v) for v in row) + " |")
     return "\n".join(lines)

@@ -20,7 +20,7 @@ from typing import Any
 from mpi4py import MPI
 
 from .errors import SceneError
-from .report import richardson
+from .report import markdown_table, richardson
 from .run import solve_scene
 from .scene import apply_overrides, parse_override, read_scene_data, scene_from_dict
 
@@ -171,20 +171,23 @@ def report(rows: list[dict[str, Any]], quantity: str) -> str:
     """Markdown: every run sorted by wall time (with whether it converged), then the cheapest converged
     setting for each error level."""
     keys = list(rows[0]["settings"]) if rows else []
-    lines = [f"| {' | '.join(keys)} | {quantity} | error | reference | converged | wall s | linear solves | dofs |",
-             "|" + "---|" * (len(keys) + 7)]
-    for r in sorted(rows, key=lambda r: r["wall_time_s"]):
-        lines.append(f"| {' | '.join(str(r['settings'][k]) for k in keys)} | {r[quantity]:.5g} | "
-                     f"{100 * r['relative_error']:.2f}% | {r['reference_kind']} | {'yes' if r['converged'] else 'no'} | "
-                     f"{r['wall_time_s']:.2f} | {r['linear_solves']} | {r['dofs']} |")
-    lines += ["", "| error within | cheapest setting | error | wall s | linear solves | dofs |", "|---|---|---|---|---|---|"]
+    runs = markdown_table(None, [*keys, quantity, "error", "reference", "converged", "wall s", "linear solves",
+                                 "dofs"],
+                          [[*(str(r["settings"][k]) for k in keys), f"{r[quantity]:.5g}",
+                            f"{100 * r['relative_error']:.2f}%", r["reference_kind"], "yes" if r["converged"] else "no",
+                            f"{r['wall_time_s']:.2f}", r["linear_solves"], r["dofs"]]
+                           for r in sorted(rows, key=lambda r: r["wall_time_s"])])
+    best = []
     for entry in cheapest(rows):
         r = entry["run"]
-        setting = ", ".join(f"{k.split('.')[-1]} = {v}" for k, v in r["settings"].items()) if r else "none reaches it"
-        lines.append(f"| {100 * entry['level']:g} % | {setting} | " + (
-            f"{100 * r['relative_error']:.2f}% | {r['wall_time_s']:.2f} | {r['linear_solves']} | {r['dofs']} |"
-            if r else " |  |  |  |"))
-    return "\n".join(lines)
+        level = f"{100 * entry['level']:g} %"
+        if r is None:
+            best.append([level, "none reaches it", "", "", "", ""])
+        else:
+            best.append([level, ", ".join(f"{k.split('.')[-1]} = {v}" for k, v in r["settings"].items()),
+                         f"{100 * r['relative_error']:.2f}%", f"{r['wall_time_s']:.2f}", r["linear_solves"], r["dofs"]])
+    return runs + "\n\n" + markdown_table(None, ["error within", "cheapest setting", "error", "wall s",
+                                                 "linear solves", "dofs"], best)
 
 
 def _write_csv(path: Path, rows: list[dict[str, Any]], quantity: str, keys: list[str]) -> None:
