@@ -280,10 +280,12 @@ class FlowProblem:
                            step, previous)
 
     # -- boundary conditions ------------------------------------------------------------------
-    def boundary_dofs(self, role: str, component: int) -> np.ndarray:
-        """Local dof indices (blocked space, unrolled) of one velocity component on a boundary role."""
-        facets = self.role_facets(role)
-        return dolfinx.fem.locate_dofs_topological(self.V.sub(component), self.mesh.topology.dim - 1, facets)
+    def boundary_dofs(self, role: str, component: int, space=None) -> np.ndarray:
+        """Local dof indices (blocked space, unrolled) of one velocity component on a boundary role, in
+        ``space`` (default the velocity space V; the mixed formulation's velocity subspace for its bcs)."""
+        space = self.V if space is None else space
+        return dolfinx.fem.locate_dofs_topological(space.sub(component), self.mesh.topology.dim - 1,
+                                                   self.role_facets(role))
 
     def role_facets(self, role: str) -> np.ndarray:
         """Local facets of a boundary role."""
@@ -292,10 +294,8 @@ class FlowProblem:
     def _boundary_conditions(self) -> list:
         """The mesh's constraints: u_N = u_N^0 on Gamma1 (2.5) and u_N = 0 on Gamma6 (2.8)."""
         velocity = self.system_space.sub(0) if self.mixed else self.V
-        fdim = self.mesh.topology.dim - 1
-        return [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value), dolfinx.fem.locate_dofs_topological(
-            velocity.sub(c.component), fdim, self.role_facets(c.role)), velocity.sub(c.component))
-            for c in self.constraints]
+        return [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value), self.boundary_dofs(c.role, c.component, velocity),
+                                        velocity.sub(c.component)) for c in self.constraints]
 
     # -- secant state ---------------------------------------------------------------------------
     def set_uniform_secant(self, rate: float) -> None:

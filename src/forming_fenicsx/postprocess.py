@@ -27,8 +27,6 @@ def _integrate(problem: FlowProblem, integrand) -> float:
     return problem.comm.allreduce(local)
 
 
-
-
 def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
     """Force the constraint on ``role`` exerts on the workpiece along its component: the residual summed
     over the constrained dofs."""
