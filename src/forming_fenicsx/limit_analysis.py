@@ -157,15 +157,16 @@ def _gradients(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, n
     return b, c
 
 
-def _outward(points: np.ndarray, triangles: np.ndarray, owner: np.ndarray, edges: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Unit tangents, unit outward normals and lengths of boundary edges owned by the given triangles."""
+def _outward(points: np.ndarray, triangles: np.ndarray, owners: dict, edges: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The triangle owning each boundary edge, the edges' unit tangents, unit outward normals and lengths."""
+    owner = np.array([owners[(min(a, b), max(a, b))][0][0] for a, b in edges.tolist()])
     tangent = points[edges[:, 1]] - points[edges[:, 0]]
     length = np.linalg.norm(tangent, axis=1)
     tangent = tangent / length[:, None]
     normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
     away = np.einsum("ij,ij->i", normal, points[edges[:, 0]] - points[triangles[owner]].mean(axis=1))
-    return tangent, normal * np.sign(away)[:, None], length
+    return owner, tangent, normal * np.sign(away)[:, None], length
 
 
 def _solve(kind: str, objective: np.ndarray, upper: _Rows, rhs_upper: np.ndarray, equal: _Rows,
@@ -197,6 +198,11 @@ def lower_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
     points, triangles, boundary = strip_triangulation(geometry, size_min, size_max, growth)
     n_tri = len(triangles)
     var = (9 * np.arange(n_tri))[:, None] + 3 * np.arange(3)[None, :]   # first unknown of each vertex
+
+    def first_of(owner: np.ndarray, vertex: np.ndarray) -> np.ndarray:
+        """The first unknown of each given vertex in the triangle of the same index in ``owner``."""
+        return var[owner, np.where(triangles[owner] == vertex[:, None])[1]]
+
     equal, upper = _Rows(), _Rows()
 
     # equilibrium in each triangle: div sigma = 0 with the constant gradients of the linear field
@@ -222,8 +228,7 @@ def lower_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
     tangent = points[b_pts] - points[a_pts]
     normal = np.column_stack([tangent[:, 1], -tangent[:, 0]]) / np.linalg.norm(tangent, axis=1)[:, None]
     for vertex in (a_pts, b_pts):
-        first1 = var[t1, np.where(triangles[t1] == vertex[:, None])[1]]
-        first2 = var[t2, np.where(triangles[t2] == vertex[:, None])[1]]
+        first1, first2 = first_of(t1, vertex), first_of(t2, vertex)
         for axis in axes:
             d = np.broadcast_to(axis, normal.shape)
             cols1, vals1 = traction(first1, normal, d)
@@ -233,10 +238,9 @@ def lower_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
     # boundary tractions, applied at both vertices of each boundary edge in the triangle owning it
     objective = np.zeros(9 * n_tri)
     for role, edges in boundary.items():
-        owner = np.array([owners[(min(p_, q_), max(p_, q_))][0][0] for p_, q_ in edges.tolist()])
-        tangent, normal, length = _outward(points, triangles, owner, edges)
+        owner, tangent, normal, length = _outward(points, triangles, owners, edges)
         for end in (0, 1):
-            first = var[owner, np.where(triangles[owner] == edges[:, end][:, None])[1]]
+            first = first_of(owner, edges[:, end])
             if role == "free":
                 for axis in axes:
                     equal.add(*traction(first, normal, np.broadcast_to(axis, normal.shape)))
@@ -290,8 +294,7 @@ def upper_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
             equal.add([2 * ends], [1.0])
             rhs_equal.append(np.ones(len(ends)))
         elif role == "die":   # u . n <= 0 at both ends of each die edge
-            owner = np.array([owners[(min(p_, q_), max(p_, q_))][0][0] for p_, q_ in edges.tolist()])
-            _, normal, _ = _outward(points, triangles, owner, edges)
+            _, _, normal, _ = _outward(points, triangles, owners, edges)
             for end in (0, 1):
                 upper.add([2 * edges[:, end], 2 * edges[:, end] + 1], [normal[:, 0], normal[:, 1]])
     objective = np.zeros(2 * n_pts + n_tri)
