@@ -383,8 +383,13 @@ def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, A
         raise SceneError(f"{section}.{key_name(unknown[0])}",
                          f"unknown key; allowed keys in [{section}]: {', '.join(names)}")
     values = dict(defaults or {})
+    fields = {f.name: f for f in dataclasses.fields(cls)}
     for key, value in table.items():
-        values[key] = _coerce(f"{section}.{key}", value, hints[key])
+        value = _coerce(f"{section}.{key}", value, hints[key])
+        if isinstance(value, dict):  # a table is merged over the default one, key by key
+            default = values.get(key, fields[key].default_factory())
+            value = {**default, **value}
+        values[key] = value
     return cls(**values)
 
 
