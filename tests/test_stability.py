@@ -39,7 +39,8 @@ def test_newtonian_alpha_one_first_iterate_is_the_answer():
     """alpha = 1 makes G = A constant (inside [rate1, rate2] and, clipped, outside): the first linear
     solve is the answer up to the contact active set, which starts as the whole die face; the second
     solve drops the separating points (an increment of 2.7e-7 that scales with d_N: 2.7e-9 at d_N
-    100 times smaller) and the third changes nothing."""
+    100 times smaller) and the third changes nothing: its increment is rounding (1e-15 to 1e-14, the
+    order varying with MUMPS' parallel scheduling), bounded here by 1e-12, far below the second's."""
     increments = {}
     for d_n in (1e-6, 1e-8):
         scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5}, penalty={"d_N": d_n},
@@ -47,7 +48,7 @@ def test_newtonian_alpha_one_first_iterate_is_the_answer():
         result = solve_scene(scene)[1]
         assert result.converged and result.linear_solves == 3
         increments[d_n] = [record.increment for record in result.history]
-        assert increments[d_n][1] < 1e-6 and increments[d_n][2] < 1e-14
+        assert increments[d_n][1] < 1e-6 and increments[d_n][2] < 1e-12
     assert increments[1e-8][1] == pytest.approx(increments[1e-6][1] / 100, rel=0.05)
 
 
