@@ -7,7 +7,7 @@ import sys
 
 from mpi4py import MPI
 
-from forming_fenicsx.bench import compare, run_case
+from forming_fenicsx.bench import compare, median_run, run_case
 
 
 def test_run_case_in_process_gives_a_full_row():
@@ -27,7 +27,7 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                    OMPI_MCA_rmaps_base_oversubscribe="1", PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
         done = subprocess.run([sys.executable, "-m", "forming_fenicsx.cli", "bench", "--examples", "1", "--sizes",
-                               "1.0", "--methods", "direct", "newton", "--out", str(out)],
+                               "1.0", "--methods", "direct", "newton", "--repeat", "2", "--out", str(out)],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
         assert "| example | h | ranks | formulation | method | converged |" in done.stdout
@@ -35,6 +35,14 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
     rows = {r["method"]: r for r in json.loads(out.read_text())}
     assert rows["newton"]["linear_solves"] < rows["direct"]["linear_solves"]
     assert rows["newton"]["vs_direct"] < 1e-3 and rows["direct"]["vs_direct"] == 0
+    for row in rows.values():  # two runs each, the faster kept (the lower middle of two)
+        assert len(row["wall_time_runs_s"]) == 2 and row["wall_time_s"] == min(row["wall_time_runs_s"])
+
+
+def test_median_run_keeps_the_middle_run_and_every_time():
+    runs = [{"wall_time_s": t, "linear_solves": n} for t, n in ((3.0, 7), (1.0, 8), (2.0, 9))]
+    row = median_run(runs)
+    assert row["wall_time_s"] == 2.0 and row["linear_solves"] == 9 and row["wall_time_runs_s"] == [3.0, 1.0, 2.0]
 
 
 def test_compare_against_direct_and_one_rank():
