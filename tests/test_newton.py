@@ -8,6 +8,7 @@ import pytest
 from mpi4py import MPI
 
 import dolfinx.fem.petsc
+from petsc4py import PETSc
 
 from forming_fenicsx.compat import petsc_vec, set_at_quadrature_points
 from forming_fenicsx.errors import SceneError
@@ -78,6 +79,19 @@ def test_newton_extrusion_few_solves_same_answer():
     assert newton["converged"] and newton["linear_solves"] <= 15
     assert newton["ram_pressure"] == pytest.approx(reference["ram_pressure"], rel=1e-3)
     assert newton["force_balance_residual"] < 1e-4
+
+
+def test_newton_shares_the_secant_matrix_one_symbolic_factorisation():
+    """The secant start and the Newton steps assemble into one matrix: MUMPS analyses its pattern once
+    and factorises numerically once per linear solve (PETSc's event counts on this rank)."""
+    PETSc.Log.begin()
+    symbolic, numeric = PETSc.Log.Event("MatLUFactorSym"), PETSc.Log.Event("MatLUFactorNum")
+    before = symbolic.getPerfInfo()["count"], numeric.getPerfInfo()["count"]
+    result = solve_scene(make_scene(discretisation={"mesh_size": 1.0, "averaging": "quadrature"},
+                                    solver={"method": "newton"}))[1]
+    assert result.converged and result.linear_solves > 4
+    assert symbolic.getPerfInfo()["count"] - before[0] == 1
+    assert numeric.getPerfInfo()["count"] - before[1] == result.linear_solves
 
 
 @pytest.mark.parametrize("mu", [0.0, 0.4])

@@ -31,13 +31,13 @@ class NewtonSolver(SecantSolver):
     def __init__(self, problem, petsc_options=None, balance=None, stop=None):
         super().__init__(problem, petsc_options, balance, stop)
         self.forms = problem.newton_forms()
-        self.newton = LinearSolver(problem, {**self.settings.petsc_options, **(petsc_options or {})},
-                                   bilinear=self.forms.operator, linear=self.forms.residual)
+        self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual,
+                                   matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
         self._velocity = problem.u.copy()
 
     def destroy(self) -> None:
-        super().destroy()
         self.newton.destroy()
+        super().destroy()
 
     def energy_value(self) -> float:
         """Phi(u) at the current u (collective)."""

@@ -28,24 +28,32 @@ UNSOLVABLE = 10.0       # and stops at once when it reaches this multiple of del
 
 class LinearSolver:
     """Matrix, right-hand side and KSP of one bilinear form, created once and reused by every iterate
-    (the secant system b(u_n; ., .) of the problem by default, or another form such as a Jacobian)."""
+    (the secant system b(u_n; ., .) of the problem by default, or another form such as a Jacobian).
+
+    ``matrix_of``: another LinearSolver whose matrix and KSP this one assembles into and factorises, for
+    a form on the same space (hence the same sparsity): MUMPS' symbolic analysis is then done once for
+    both, and one set of factors is held (Newton's operator after the secant start's matrix)."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
-                 linear: Any = None):
+                 linear: Any = None, matrix_of: LinearSolver | None = None):
         self.problem = problem
         self.a = bilinear if bilinear is not None else problem.a
-        self.A = dolfinx.fem.petsc.create_matrix(self.a)
         self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.system_vector)
-        self.ksp = PETSc.KSP().create(problem.comm)
-        prefix = f"forming_{next(_prefixes)}_"
-        self.ksp.setOptionsPrefix(prefix)
-        options = PETSc.Options()
-        for key, value in petsc_options.items():
-            options[prefix + key] = value
-        self.ksp.setFromOptions()
-        self.A.setOptionsPrefix(prefix)
-        self.A.setFromOptions()
-        self.ksp.setOperators(self.A)
+        self._owner = matrix_of is None
+        if matrix_of is not None:
+            self.A, self.ksp = matrix_of.A, matrix_of.ksp
+        else:
+            self.A = dolfinx.fem.petsc.create_matrix(self.a)
+            self.ksp = PETSc.KSP().create(problem.comm)
+            prefix = f"forming_{next(_prefixes)}_"
+            self.ksp.setOptionsPrefix(prefix)
+            options = PETSc.Options()
+            for key, value in petsc_options.items():
+                options[prefix + key] = value
+            self.ksp.setFromOptions()
+            self.A.setOptionsPrefix(prefix)
+            self.A.setFromOptions()
+            self.ksp.setOperators(self.A)
         self._residual = self.b.duplicate()
         self._correction = self.b.duplicate()
         self._x: PETSc.Vec | None = None
@@ -108,7 +116,8 @@ class LinearSolver:
         return self._correction.norm() / norm if norm > 0 else 0.0
 
     def destroy(self) -> None:
-        for item in (self.ksp, self.A, self.b, self._residual, self._correction):
+        owned = (self.ksp, self.A) if self._owner else ()
+        for item in (*owned, self.b, self._residual, self._correction):
             item.destroy()
 
 
