@@ -57,20 +57,17 @@ rows = []
 
 def after_solve() -> str | None:
     """The solver's stop hook, called on every rank after every linear solve but the first (the
-    uniform-modulus start): measure against the previous iterate from the second call on; never stop."""
-    if measured:
-        rows.append([comm.allreduce(dolfinx.fem.assemble_scalar(form)) for form in forms.values()])
-    measured.append(True)
+    uniform-modulus start): measure against the previous iterate; never stop."""
+    rows.append([comm.allreduce(dolfinx.fem.assemble_scalar(form)) for form in forms.values()])
     last.x.array[:] = u.x.array
     return None
 
 
-measured: list[bool] = []
 solver = NewtonSolver(problem, stop=after_solve)
 result = solver.solve()
-records = result.history[2:]  # solve 0 is the start, solve 1 sets the first reference
-rows = [[index + 2, f"{record.increment:.2e}", f"{record.step:.3g}", *row]
-        for index, (row, record) in enumerate(zip(rows, records, strict=True))]
+# solve 0 is the start and solve 1 is measured against the zero field: the table starts at solve 2
+rows = [[index, f"{record.increment:.2e}", f"{record.step:.3g}", *row]
+        for index, (row, record) in enumerate(zip(rows, result.history[1:], strict=True), start=1)][1:]
 if comm.rank == 0:
     print(markdown_table(f"{Path(args.scene).stem}, h = {args.mesh_size}: {result.linear_solves} solves, "
                          f"{'converged' if result.converged else result.reason}",

@@ -377,13 +377,12 @@ def _coerce(key: str, value: Any, tp: Any) -> Any:
 
 def _build(cls: type, table: dict[str, Any], section: str, defaults: dict[str, Any] | None = None) -> Any:
     hints = typing.get_type_hints(cls)
-    names = [f.name for f in dataclasses.fields(cls)]
-    unknown = sorted(set(table) - set(names))
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(table) - set(fields))
     if unknown:
         raise SceneError(f"{section}.{key_name(unknown[0])}",
-                         f"unknown key; allowed keys in [{section}]: {', '.join(names)}")
+                         f"unknown key; allowed keys in [{section}]: {', '.join(fields)}")
     values = dict(defaults or {})
-    fields = {f.name: f for f in dataclasses.fields(cls)}
     for key, value in table.items():
         value = _coerce(f"{section}.{key}", value, hints[key])
         if isinstance(value, dict):  # a table is merged over the default one, key by key

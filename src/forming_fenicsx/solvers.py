@@ -32,7 +32,8 @@ class LinearSolver:
 
     ``matrix_of``: another LinearSolver whose matrix and KSP this one assembles into and factorises, for
     a form on the same space (hence the same sparsity): MUMPS' symbolic analysis is then done once for
-    both, and one set of factors is held (Newton's operator after the secant start's matrix)."""
+    both, and one set of factors is held (Newton's operator after the secant start's matrix); its
+    ``petsc_options`` are then those of that KSP, and the argument is not read."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
                  linear: Any = None, matrix_of: LinearSolver | None = None):
