@@ -108,7 +108,7 @@ def test_newton_drawing_with_contact_and_friction(mu):
 
 def test_newton_history_and_scene_check(shared_tmp):
     """history.csv carries the residual norm and the step length of each Newton step; Newton needs the
-    secant at the Gauss points."""
+    secant at the Gauss points, and LU (its operator is not symmetric)."""
     out = shared_tmp / "newton"
     run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0}, solver={"method": "newton"}), out)
     MPI.COMM_WORLD.barrier()
@@ -119,6 +119,9 @@ def test_newton_history_and_scene_check(shared_tmp):
     assert float(newton_rows[-1]["relative_increment"]) < 1e-4
     with pytest.raises(SceneError, match="averaging"):
         make_scene(solver={"method": "newton"})
+    with pytest.raises(SceneError, match="not symmetric") as error:
+        make_scene(discretisation=QUADRATURE, solver={"method": "newton", "petsc_options": {"pc_type": "cholesky"}})
+    assert error.value.key == "solver.petsc_options.pc_type"
 
 
 @pytest.mark.parametrize("sections", [

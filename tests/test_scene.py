@@ -37,8 +37,8 @@ def test_overrides_take_toml_values_and_bare_strings():
 
 def test_petsc_options_merge_over_the_default_table():
     scene = load_scene(DEMOS / "example1_extrusion.toml", ["solver.petsc_options.mat_mumps_icntl_7=5"])
-    assert scene.solver.petsc_options == {"ksp_type": "preonly", "pc_type": "lu",
-                                          "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 5}
+    assert scene.solver.petsc_options == {"ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps",
+                                          "mat_mumps_icntl_7": 5}
     scene = load_scene(DEMOS / "example1_extrusion.toml", ["solver.petsc_options.pc_type=cholesky"])
     assert scene.solver.petsc_options["pc_type"] == "cholesky"
     assert scene.solver.petsc_options["pc_factor_mat_solver_type"] == "mumps"

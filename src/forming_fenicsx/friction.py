@@ -80,7 +80,7 @@ class AveragedNormalStress:
         self._ksp.setType(petsc_options.get("ksp_type", "preonly"))
         pc = self._ksp.getPC()
         pc.setType(petsc_options.get("pc_type", "lu"))
-        if pc.getType() == "lu":
+        if pc.getType() in ("lu", "cholesky"):
             pc.setFactorSolverType(petsc_options.get("pc_factor_mat_solver_type", "mumps"))
 
     def update(self) -> dolfinx.fem.Function:

@@ -230,7 +230,7 @@ class Solver:
     reference_strain_rate: float | None = None
     force_tolerance: float = 0.0
     petsc_options: dict[str, Any] = field(default_factory=lambda: {
-        "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"})
+        "ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps"})
 
     def check(self) -> None:
         if self.method not in ("direct", "modified", "newton"):
@@ -247,6 +247,9 @@ class Solver:
         rate = self.reference_strain_rate
         if rate is not None and not (math.isfinite(rate) and rate > 0):
             raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")
+        if self.method == "newton" and self.petsc_options.get("pc_type") == "cholesky":
+            raise SceneError("solver.petsc_options.pc_type",
+                             "Newton's operator is not symmetric: Cholesky would solve another system; use lu")
         for key, value in self.petsc_options.items():
             if not isinstance(value, (str, int, float, bool)):
                 raise SceneError(f"solver.petsc_options.{key}",

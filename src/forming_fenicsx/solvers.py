@@ -36,8 +36,9 @@ class LinearSolver:
     ``petsc_options`` are then those of that KSP, and the argument is not read."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
-                 linear: Any = None, matrix_of: LinearSolver | None = None):
+                 linear: Any = None, matrix_of: LinearSolver | None = None, positive_definite: bool = False):
         self.problem = problem
+        self.positive_definite = positive_definite
         self.a = bilinear if bilinear is not None else problem.a
         self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.system_vector)
         self._owner = matrix_of is None
@@ -65,6 +66,8 @@ class LinearSolver:
         self.A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(self.A, self.a, bcs=self.problem.bcs)
         self.A.assemble()
+        if self.positive_definite:  # MUMPS then factorises L L^T, without pivoting (read at the first factorisation)
+            self.A.setOption(PETSc.Mat.Option.SPD, True)
         self.timings.assembly += time.perf_counter() - start
 
     def solve(self) -> None:
@@ -188,7 +191,9 @@ class SolveResult:
 
 
 class SecantSolver:
-    """The direct (3.13) or modified (3.33) secant-modulus method for a FlowProblem."""
+    """The direct (3.13) or modified (3.33) secant-modulus method for a FlowProblem.
+
+    The default pc_type (under a scene's or the caller's) is ``factorisation(problem)``."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None,
                  balance: Callable[[], float] | None = None, stop: Callable[[], str | None] | None = None):
@@ -200,10 +205,20 @@ class SecantSolver:
         self.stop = stop
         settings = problem.scene.solver
         self.settings = settings
-        self.linear = LinearSolver(problem, {**settings.petsc_options, **(petsc_options or {})})
+        options = {"pc_type": self.factorisation(problem), **settings.petsc_options, **(petsc_options or {})}
+        self.linear = LinearSolver(problem, options,
+                                   positive_definite=options["pc_type"] == "cholesky" and not problem.mixed)
         self._previous = problem.u.copy()
         self._state_is_current = False
         self._difference = petsc_vec(problem.u).duplicate()
+
+    @staticmethod
+    def factorisation(problem: FlowProblem) -> str:
+        """b(w; u, v) of (3.5) is symmetric in u and v and, with the penalty, positive definite: Cholesky
+        (MUMPS L L^T, about half the work and memory of LU). The mixed formulation's saddle point is
+        factorised by LU: an L D L^T with pivoting there needs ever more delayed pivots as contact and
+        friction stiffen it."""
+        return "lu" if problem.mixed else "cholesky"
 
     def destroy(self) -> None:
         self.linear.destroy()
