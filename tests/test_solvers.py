@@ -153,3 +153,18 @@ def test_newton_operator_is_not_symmetric_and_factorised_by_lu():
     assert solver.linear.ksp.getPC().getType() == "lu" and solver.newton.A is solver.linear.A
     assert asymmetry(solver.newton.A) > 1e-6
     solver.destroy()
+
+
+@pytest.mark.parametrize("method", ["direct", "newton"])
+def test_solve_error_is_sampled_on_solves_1_2_4_8_and_the_last(method):
+    """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear solves
+    1, 2, 4, 8, ... and on the last one; the summary's value is the largest of those."""
+    problem, result, summary = solve_scene(make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature"},
+                                                      solver={"method": method}))
+    assert result.converged and len(result.history) == result.linear_solves > 8
+    sampled = [number for number, record in enumerate(result.history, start=1) if not np.isnan(record.solve_error)]
+    last = result.linear_solves
+    assert sampled == sorted({2**k for k in range(last.bit_length()) if 2**k <= last} | {last})
+    estimates = [result.history[n - 1].solve_error for n in sampled]
+    assert all(0 < e < 1e-6 for e in estimates)
+    assert summary["solve_error_estimate"] == max(estimates)

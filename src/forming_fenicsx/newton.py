@@ -84,7 +84,8 @@ class NewtonSolver(SecantSolver):
                              "iterate. Try a secant method or larger penalty parameters")
             return math.nan
         result.linear_solves += 1
-        solve_error = self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
+        self._estimate = lambda: self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)  # relative to u
+        solve_error = self.sampled_error(result)
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms.step.x.scatter_forward()
