@@ -158,7 +158,7 @@ def test_newton_operator_is_not_symmetric_and_factorised_by_lu():
 @pytest.mark.parametrize("method", ["direct", "newton"])
 def test_solve_error_is_sampled_on_solves_1_2_4_8_and_the_last(method):
     """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear solves
-    1, 2, 4, 8, ... and on the last one; the summary's value is the largest of those."""
+    1, 2, 4, 8, ... and on the last one of a converged run; the summary's value is the largest of those."""
     problem, result, summary = solve_scene(make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature"},
                                                       solver={"method": method}))
     assert result.converged and len(result.history) == result.linear_solves > 8

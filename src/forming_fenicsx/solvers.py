@@ -262,7 +262,7 @@ class SecantSolver:
 
     def sampled_error(self, result: SolveResult) -> float:
         """The estimated error of the last linear solve (``self._estimate``) on the run's solves 1, 2, 4,
-        8, ... and NaN on the others; solve() adds it for the last solve. Each estimate costs a pair of
+        8, ... and NaN on the others; solve() adds it for the last solve of a converged run. Each estimate costs a pair of
         triangular solves, which scale worst of a run's parts on more ranks; the systems' conditioning
         changes slowly from iterate to iterate, and the first solves (where a hopeless penalty shows)
         are all sampled."""
@@ -368,9 +368,10 @@ class SecantSolver:
         method) or else from the solution with a uniform modulus; with the time split of the run."""
         start = time.perf_counter()
         result = self._iterate(initial)
-        last = result.history[-1] if result.history else None
-        if last is not None and math.isnan(last.solve_error) and math.isfinite(last.increment):
-            last.solve_error = self._estimate()  # the answer's own linear solve is always estimated
+        if result.converged and math.isnan(result.history[-1].solve_error):
+            # the answer's own linear solve, whose factors are still the current ones (after a failed
+            # solve they would not be)
+            result.history[-1].solve_error = self._estimate()
         result.iteration_time = time.perf_counter() - start
         result.timings = self.timings()
         return result
