@@ -81,13 +81,17 @@ def test_newton_extrusion_few_solves_same_answer():
     assert newton["force_balance_residual"] < 1e-4
 
 
-def test_newton_shares_the_secant_matrix_one_symbolic_factorisation():
+@pytest.mark.parametrize("formulation, events", [("penalty", ("MatCholFctrSym", "MatCholFctrNum")),
+                                                  ("mixed", ("MatLUFactorSym", "MatLUFactorNum"))])
+def test_newton_shares_the_secant_matrix_one_symbolic_factorisation(formulation, events):
     """The secant start and the Newton steps assemble into one matrix: MUMPS analyses its pattern once
-    and factorises numerically once per linear solve (PETSc's event counts on this rank)."""
+    and factorises numerically once per linear solve (PETSc's event counts on this rank), by Cholesky
+    with the penalty (the symmetrised operator is positive definite) and by LU for the saddle point."""
     PETSc.Log.begin()
-    symbolic, numeric = PETSc.Log.Event("MatLUFactorSym"), PETSc.Log.Event("MatLUFactorNum")
+    symbolic, numeric = (PETSc.Log.Event(name) for name in events)
     before = symbolic.getPerfInfo()["count"], numeric.getPerfInfo()["count"]
-    result = solve_scene(make_scene(discretisation={"mesh_size": 1.0, "averaging": "quadrature"},
+    result = solve_scene(make_scene(discretisation={"mesh_size": 1.0, "averaging": "quadrature",
+                                                    "formulation": formulation},
                                     solver={"method": "newton"}))[1]
     assert result.converged and result.linear_solves > 4
     assert symbolic.getPerfInfo()["count"] - before[0] == 1
@@ -108,7 +112,7 @@ def test_newton_drawing_with_contact_and_friction(mu):
 
 def test_newton_history_and_scene_check(shared_tmp):
     """history.csv carries the residual norm and the step length of each Newton step; Newton needs the
-    secant at the Gauss points, and LU (its operator is not symmetric)."""
+    secant at the Gauss points."""
     out = shared_tmp / "newton"
     run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0}, solver={"method": "newton"}), out)
     MPI.COMM_WORLD.barrier()
@@ -119,9 +123,6 @@ def test_newton_history_and_scene_check(shared_tmp):
     assert float(newton_rows[-1]["relative_increment"]) < 1e-4
     with pytest.raises(SceneError, match="averaging"):
         make_scene(solver={"method": "newton"})
-    with pytest.raises(SceneError, match="not symmetric") as error:
-        make_scene(discretisation=QUADRATURE, solver={"method": "newton", "petsc_options": {"pc_type": "cholesky"}})
-    assert error.value.key == "solver.petsc_options.pc_type"
 
 
 @pytest.mark.parametrize("sections", [

@@ -7,6 +7,7 @@ import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.cli import main
+from forming_fenicsx.compat import set_at_quadrature_points
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
 from forming_fenicsx.newton import NewtonSolver
@@ -142,16 +143,54 @@ def test_mixed_secant_system_is_factorised_by_lu():
     solver.destroy()
 
 
-def test_newton_operator_is_not_symmetric_and_factorised_by_lu():
-    """Newton's primal-dual operator (dual stress apart from tau(u)) is not symmetric: its shared
-    factorisation is LU, whatever the secant methods use."""
-    scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature"},
+def dense(A) -> np.ndarray:
+    """The whole PETSc matrix as a dense array on every rank (small meshes only)."""
+    indptr, indices, values = A.getValuesCSR()
+    rows = np.repeat(np.arange(*A.getOwnershipRange()), np.diff(indptr))
+    parts = MPI.COMM_WORLD.allgather((rows, indices, values))
+    matrix = np.zeros(A.getSize())
+    for rows, columns, entries in parts:
+        np.add.at(matrix, (rows, columns), entries)
+    return matrix
+
+
+def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
+    """Newton's symmetrised primal-dual operator, with contact and averaged friction active and a dual
+    stress apart from tau(u) (after two Newton steps), is symmetric and positive definite, and shares
+    the secant start's Cholesky factorisation. Positive definiteness rests on the cap |tau_h| <= sigma_p:
+    with the dual three times tau(u) the same operator has negative eigenvalues."""
+    scene = make_scene(process={"kind": "drawing"}, friction={"mu": 0.2},
+                       discretisation={"mesh_size": 0.3, "element": "Q2", "volumetric_integration": "reduced",
+                                       "averaging": "quadrature"},
                        solver={"method": "newton", "max_iterations": 2})
     problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = NewtonSolver(problem)
     solver.solve()
-    assert solver.linear.ksp.getPC().getType() == "lu" and solver.newton.A is solver.linear.A
-    assert asymmetry(solver.newton.A) > 1e-6
+    assert solver.linear.ksp.getPC().getType() == "cholesky" and solver.newton.A is solver.linear.A
+    assert solver.newton.positive_definite
+    solver.newton.assemble_matrix()
+    assert asymmetry(solver.newton.A) < 1e-14
+    matrix = dense(solver.newton.A)
+    eigenvalues = np.linalg.eigvalsh((matrix + matrix.T) / 2)
+    assert eigenvalues[0] > 1e-10 * eigenvalues[-1]  # measured 5e-8: clear of rounding (1e-16)
+    set_at_quadrature_points(solver.forms.dual, solver.forms.dual_reset)
+    solver.forms.dual.x.array[:] *= 3.0
+    solver.newton.assemble_matrix()
+    matrix = dense(solver.newton.A)
+    assert np.linalg.eigvalsh((matrix + matrix.T) / 2)[0] < 0
+    solver.destroy()
+
+
+def test_mixed_newton_operator_is_factorised_by_lu():
+    """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the secant's."""
+    scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature", "formulation": "mixed"},
+                       solver={"method": "newton", "max_iterations": 1})
+    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    solver = NewtonSolver(problem)
+    solver.solve()
+    assert solver.linear.ksp.getPC().getType() == "lu" and not solver.newton.positive_definite
+    solver.newton.assemble_matrix()
+    assert asymmetry(solver.newton.A) < 1e-14
     solver.destroy()
 
 

@@ -212,7 +212,12 @@ class FlowProblem:
         (primal-dual Newton, as for total-variation problems): d tau = 2/3 G e'(du) + (G'/G) d rate tau_h.
         With tau_h = tau(u) this is the consistent tangent, whose stiffness along the flow direction is
         only about alpha times the secant; carrying tau_h separately (updated by the same linearisation
-        and capped at the flow stress) keeps the steps well scaled far from the answer. The contact
+        and capped at the flow stress) keeps the steps well scaled far from the answer. The operator
+        takes the symmetric part of the coupling term, (d rate(du) tau_h:e(v) + d rate(v) tau_h:e(du))/2
+        (Hintermueller and Stadler's symmetrised primal-dual Newton): it equals the consistent tangent
+        when tau_h = tau(u), and with |tau_h| <= sigma_p(rate) (the cap) its smallest eigenvalue is alpha
+        times the secant's, so the operator is symmetric positive definite with the penalty (Cholesky)
+        and every Newton step is a descent direction of Phi. The contact
         penalty enters with its active set at u (semismooth), the regularised friction with its
         derivative at a fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the
         nonlocal averaged normal stress is not differentiated). The rate is regularised as
@@ -237,15 +242,24 @@ class FlowProblem:
         def stress(w):
             return 2.0 / 3.0 * material.secant_ufl(rate(w)) * deviatoric(strain_rate(w))
 
-        def stress_change(w, dw, tau):
-            """d tau = 2/3 G e'(dw) + (G'/G) d rate tau at w."""
+        def secant_and_coupling(w):
+            """G and (G'/G)/rate at w: d tau = 2/3 G e'(dw) + coupling e'(w):e'(dw) 2/3 tau."""
             r = ufl.variable(rate(w))
             g = material.secant_ufl(r)
-            d_rate = 2.0 / 3.0 * deviatoric_product(strain_rate(w), strain_rate(dw)) / r
-            return 2.0 / 3.0 * g * deviatoric(strain_rate(dw)) + ufl.diff(g, r) / g * d_rate * tau
+            return g, ufl.diff(g, r) / g / r
 
+        def stress_change(w, dw, tau):
+            """d tau = 2/3 G e'(dw) + (G'/G) d rate tau at w, d rate = 2/3 e'(w):e'(dw) / rate."""
+            g, coupling = secant_and_coupling(w)
+            d_rate = 2.0 / 3.0 * deviatoric_product(strain_rate(w), strain_rate(dw))
+            return 2.0 / 3.0 * g * deviatoric(strain_rate(dw)) + coupling * d_rate * tau
+
+        g, coupling = secant_and_coupling(u)
+        e, e_du, e_v = strain_rate(u), strain_rate(du), strain_rate(v)
+        symmetric_coupling = (deviatoric_product(e, e_du) * ufl.inner(dual, e_v)
+                              + deviatoric_product(e, e_v) * ufl.inner(dual, e_du)) / 3.0  # 2/3 of the mean
         energy = material.potential_ufl(rate(u)) * self.dx
-        operator = ufl.inner(stress_change(u, du, dual), strain_rate(v)) * self.dx
+        operator = (2.0 / 3.0 * g * deviatoric_product(e_du, e_v) + coupling * symmetric_coupling) * self.dx
         if self.mixed:
             operator -= (dp * ufl.div(v) + q * ufl.div(du)) * self.dx
         else:

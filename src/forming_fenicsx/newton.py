@@ -28,12 +28,8 @@ MAX_HALVINGS = 12   # smallest step 2**-12
 class NewtonSolver(SecantSolver):
     """Newton's method (solver.method = "newton") after a few direct secant iterates.
 
-    Its operator, assembled into the secant start's matrix, is not symmetric (the dual stress term), so
-    the shared factorisation is LU."""
-
-    @staticmethod
-    def factorisation(problem) -> str:
-        return "lu"
+    Its operator (symmetrised primal-dual, FlowProblem.newton_forms) is assembled into the secant start's
+    matrix and shares its factorisation: Cholesky with the penalty, LU for the mixed saddle point."""
 
     def __init__(self, problem, petsc_options=None, balance=None, stop=None):
         super().__init__(problem, petsc_options, balance, stop)

@@ -247,9 +247,6 @@ class Solver:
         rate = self.reference_strain_rate
         if rate is not None and not (math.isfinite(rate) and rate > 0):
             raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")
-        if self.method == "newton" and self.petsc_options.get("pc_type") == "cholesky":
-            raise SceneError("solver.petsc_options.pc_type",
-                             "Newton's operator is not symmetric: Cholesky would solve another system; use lu")
         for key, value in self.petsc_options.items():
             if not isinstance(value, (str, int, float, bool)):
                 raise SceneError(f"solver.petsc_options.{key}",

@@ -34,12 +34,13 @@ class LinearSolver:
     ``matrix_of``: another LinearSolver whose matrix and KSP this one assembles into and factorises, for
     a form on the same space (hence the same sparsity): MUMPS' symbolic analysis is then done once for
     both, and one set of factors is held (Newton's operator after the secant start's matrix); its
-    ``petsc_options`` are then those of that KSP, and the argument is not read."""
+    ``petsc_options`` and ``positive_definite`` are then those of that KSP and matrix, and the arguments
+    are not read."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
                  linear: Any = None, matrix_of: LinearSolver | None = None, positive_definite: bool = False):
         self.problem = problem
-        self.positive_definite = positive_definite
+        self.positive_definite = matrix_of.positive_definite if matrix_of is not None else positive_definite
         self.a = bilinear if bilinear is not None else problem.a
         self.b = dolfinx.fem.petsc.create_vector(linear if linear is not None else problem.system_vector)
         self._owner = matrix_of is None
