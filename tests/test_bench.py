@@ -31,6 +31,9 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
         assert "| example | h | ranks | formulation | method | converged |" in done.stdout
+        order = [(line.split(":")[0], line.split(", ")[-2].split(":")[0]) for line in done.stdout.splitlines()
+                 if line.startswith("run ")]  # rounds: every case once, then again
+        assert order == [("run 1/2", "direct"), ("run 1/2", "newton"), ("run 2/2", "direct"), ("run 2/2", "newton")]
     MPI.COMM_WORLD.barrier()
     rows = {r["method"]: r for r in json.loads(out.read_text())}
     assert rows["newton"]["linear_solves"] < rows["direct"]["linear_solves"]

@@ -131,7 +131,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                         help="override a scene value in every case")
     parser.add_argument("--repeat", type=int, default=1,
-                        help="run each case so many times and keep the run of median wall time")
+                        help="run every case once per round, so many rounds, and keep each case's run of "
+                             "median wall time")
     parser.add_argument("--out", default="results/bench.json")
     args = parser.parse_args(argv)
     if args.repeat < 1:
@@ -146,18 +147,18 @@ def main(argv: list[str] | None = None) -> int:
     if "OMPI_COMM_WORLD_SIZE" in os.environ or "PMI_RANK" in os.environ:
         print("forming bench: run it without mpirun; --ranks sets the ranks of each case", file=sys.stderr)
         return 2
-    rows = []
-    for example in args.examples:
-        for size in args.sizes or DEFAULT_SIZES[example]:
-            for ranks in args.ranks:
-                for formulation in args.formulations:
-                    for method in args.methods:
-                        case = {"example": example, "mesh_size": size, "method": method,
-                                "formulation": formulation, "set": args.set}
-                        rows.append(median_run([_launch(case, ranks) for _ in range(args.repeat)]))
-                        times = ", ".join(f"{t:.2f}" for t in rows[-1]["wall_time_runs_s"])
-                        print(f"example {example}, h = {size}, {ranks} rank(s), {formulation}, {method}: "
-                              f"{rows[-1]['linear_solves']} solves, {times} s", flush=True)
+    cases = [({"example": example, "mesh_size": size, "method": method, "formulation": formulation,
+               "set": args.set}, ranks)
+             for example in args.examples for size in args.sizes or DEFAULT_SIZES[example]
+             for ranks in args.ranks for formulation in args.formulations for method in args.methods]
+    runs: list[list[dict[str, Any]]] = [[] for _ in cases]
+    for round_ in range(1, args.repeat + 1):  # every case once per round: a slow spell of the machine
+        for (case, ranks), case_runs in zip(cases, runs):  # falls on all cases alike
+            case_runs.append(_launch(case, ranks))
+            print(f"run {round_}/{args.repeat}: example {case['example']}, h = {case['mesh_size']}, {ranks} rank(s), "
+                  f"{case['formulation']}, {case['method']}: {case_runs[-1]['linear_solves']} solves, "
+                  f"{case_runs[-1]['wall_time_s']:.2f} s", flush=True)
+    rows = [median_run(case_runs) for case_runs in runs]
     compare(rows)
     print(table(rows))
     out = Path(args.out)

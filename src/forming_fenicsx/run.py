@@ -30,7 +30,9 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
-    folder whose velocity.npz (same mesh) starts the iteration."""
+    folder whose velocity.npz (same mesh) starts the iteration. Timed from when every rank has entered (a
+    rank still starting its interpreter is not the run's time)."""
+    comm.barrier()
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
     initial = None
