@@ -37,7 +37,7 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
     set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
     u = petsc_vec(problem.u)
     start, residual = u.copy(), newton.assemble_residual().copy()
-    newton.newton.assemble_matrix()
+    newton.assemble_operator()
     direction = u.duplicate()
     direction.setRandom(PETSc_random(problem.comm))
     dolfinx.fem.petsc.set_bc(direction, problem.bcs, None, 0.0)  # zero on the constrained dofs

@@ -168,14 +168,14 @@ def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
     solver.solve()
     assert solver.linear.ksp.getPC().getType() == "cholesky" and solver.newton.A is solver.linear.A
     assert solver.newton.positive_definite
-    solver.newton.assemble_matrix()
+    solver.assemble_operator()
     assert asymmetry(solver.newton.A) < 1e-14
     matrix = dense(solver.newton.A)
     eigenvalues = np.linalg.eigvalsh((matrix + matrix.T) / 2)
     assert eigenvalues[0] > 1e-10 * eigenvalues[-1]  # measured 5e-8: clear of rounding (1e-16)
     set_at_quadrature_points(solver.forms.dual, solver.forms.dual_reset)
     solver.forms.dual.x.array[:] *= 3.0
-    solver.newton.assemble_matrix()
+    solver.assemble_operator()
     matrix = dense(solver.newton.A)
     assert np.linalg.eigvalsh((matrix + matrix.T) / 2)[0] < 0
     solver.destroy()
@@ -189,7 +189,7 @@ def test_mixed_newton_operator_is_factorised_by_lu():
     solver = NewtonSolver(problem)
     solver.solve()
     assert solver.linear.ksp.getPC().getType() == "lu" and not solver.newton.positive_definite
-    solver.newton.assemble_matrix()
+    solver.assemble_operator()
     assert asymmetry(solver.newton.A) < 1e-14
     solver.destroy()
 

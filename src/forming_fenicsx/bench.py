@@ -153,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
              for ranks in args.ranks for formulation in args.formulations for method in args.methods]
     runs: list[list[dict[str, Any]]] = [[] for _ in cases]
     for round_ in range(1, args.repeat + 1):  # every case once per round: a slow spell of the machine
-        for (case, ranks), case_runs in zip(cases, runs):  # falls on all cases alike
+        for (case, ranks), case_runs in zip(cases, runs, strict=True):  # falls on all cases alike
             case_runs.append(_launch(case, ranks))
             print(f"run {round_}/{args.repeat}: example {case['example']}, h = {case['mesh_size']}, {ranks} rank(s), "
                   f"{case['formulation']}, {case['method']}: {case_runs[-1]['linear_solves']} solves, "

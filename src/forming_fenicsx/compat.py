@@ -50,7 +50,10 @@ def quadrature_space(mesh, degree: int, shape: tuple[int, ...]):
     if LEGACY:
         import ufl
 
-        element = ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, quad_scheme="default", shape=shape)
+        if len(shape) == 1:
+            element = ufl.VectorElement("Quadrature", mesh.ufl_cell(), degree, dim=shape[0], quad_scheme="default")
+        else:
+            element = ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, quad_scheme="default", shape=shape)
         return dolfinx.fem.FunctionSpace(mesh, element)
     import basix.ufl
 

@@ -26,7 +26,8 @@ from .scene import Scene
 class NewtonForms:
     """What Newton's method needs of a problem (FlowProblem.newton_forms): compiled energy, residual and
     operator; the dual stress at the Gauss points with the expressions that reset and update it; the
-    last Newton step du and the iterate before it."""
+    operator's material coefficients at the Gauss points (G and (G'/G)/rate at u) with the expression
+    that sets them; the last Newton step du and the iterate before it."""
 
     energy: dolfinx.fem.Form
     residual: dolfinx.fem.Form
@@ -34,6 +35,8 @@ class NewtonForms:
     dual: dolfinx.fem.Function
     dual_reset: dolfinx.fem.Expression
     dual_update: dolfinx.fem.Expression
+    tangent: dolfinx.fem.Function
+    tangent_update: dolfinx.fem.Expression
     step: dolfinx.fem.Function
     previous: dolfinx.fem.Function
 
@@ -248,13 +251,10 @@ class FlowProblem:
             g = material.secant_ufl(r)
             return g, ufl.diff(g, r) / g / r
 
-        def stress_change(w, dw, tau):
-            """d tau = 2/3 G e'(dw) + (G'/G) d rate tau at w, d rate = 2/3 e'(w):e'(dw) / rate."""
-            g, coupling = secant_and_coupling(w)
-            d_rate = 2.0 / 3.0 * deviatoric_product(strain_rate(w), strain_rate(dw))
-            return 2.0 / 3.0 * g * deviatoric(strain_rate(dw)) + coupling * d_rate * tau
-
-        g, coupling = secant_and_coupling(u)
+        # G and (G'/G)/rate at u, evaluated at the Gauss points once per step (tangent_update, before the
+        # operator is assembled): neither the operator nor the dual update then evaluates the flow law
+        tangent = dolfinx.fem.Function(quadrature_space(self.mesh, self.full_degree, (2,)), name="tangent")
+        g, coupling = tangent[0], tangent[1]
         e, e_du, e_v = strain_rate(u), strain_rate(du), strain_rate(v)
         symmetric_coupling = (deviatoric_product(e, e_du) * ufl.inner(dual, e_v)
                               + deviatoric_product(e, e_v) * ufl.inner(dual, e_du)) / 3.0  # 2/3 of the mean
@@ -265,32 +265,36 @@ class FlowProblem:
         else:
             energy += 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
             operator += self.volumetric_form(du, v)
+        boundary = []  # the die's energy terms, whose second derivative enters the operator as it is
         if self.has_contact:
-            energy += 0.5 / scene.penalty.d_N * ufl.max_value(contact.normal_velocity(u, self.n), 0.0) ** 2 \
-                * self.ds_contact
+            boundary.append(0.5 / scene.penalty.d_N * ufl.max_value(contact.normal_velocity(u, self.n), 0.0) ** 2
+                            * self.ds_contact)
         if self.has_friction:
             slip = friction.tangential(u, self.n)
             tau_f = friction.friction_bound(scene.friction.mu, self.normal_pressure())
-            energy += tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact
+            boundary.append(tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact)
+        for term in boundary:
+            energy += term
+            operator += ufl.derivative(ufl.derivative(term, w, test), w, trial)
         if self.has_force:
             energy -= ufl.action(self._load(v), w)
         residual = ufl.derivative(energy, w, test)
-        boundary = residual - ufl.inner(stress(u), strain_rate(v)) * self.dx
         if self.mixed:  # the energy (no pressure) stays a merit function: every step keeps (q, div u) = 0
             residual -= (p * ufl.div(v) + q * ufl.div(u)) * self.dx
-        else:
-            boundary -= self.volumetric_form(u, v)
-        if self.has_contact or self.has_friction:
-            operator += ufl.derivative(boundary, w, trial)
         # the full dual Newton step tau(u) - d tau(du) at the old u (whatever primal step the line search
-        # took), capped at the flow stress of the new u: the projection of primal-dual Newton methods
-        updated = stress(u_previous) - stress_change(u_previous, u_step, dual)
+        # took; the tangent still holds G and G' there), d tau = 2/3 G e'(du) + (G'/G) d rate tau_h with
+        # d rate = 2/3 e'(u):e'(du)/rate, capped at the flow stress of the new u: the projection of
+        # primal-dual Newton methods
+        e_previous, e_step = strain_rate(u_previous), strain_rate(u_step)
+        updated = 2.0 / 3.0 * g * deviatoric(e_previous - e_step) \
+            - coupling * 2.0 / 3.0 * deviatoric_product(e_previous, e_step) * dual
         equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
         cap = material.secant_ufl(rate(u)) * rate(u)
         capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
         points = quadrature_points(self.mesh, self.full_degree)
         return NewtonForms(dolfinx.fem.form(energy), dolfinx.fem.form(residual), dolfinx.fem.form(operator),
                            dual, dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
+                           tangent, dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)), points),
                            step, previous)
 
     # -- boundary conditions ------------------------------------------------------------------

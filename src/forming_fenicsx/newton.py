@@ -64,6 +64,14 @@ class NewtonSolver(SecantSolver):
         self.newton.timings.assembly += time.perf_counter() - start
         return b
 
+    def assemble_operator(self) -> None:
+        """The Newton operator at the current u and dual stress: G and G' of (4.5) at the Gauss points,
+        then the matrix."""
+        start = time.perf_counter()
+        set_at_quadrature_points(self.forms.tangent, self.forms.tangent_update)
+        self.newton.timings.assembly += time.perf_counter() - start
+        self.newton.assemble_matrix()
+
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
         """Solve J du = F at u, then u <- u - s du with the largest s = 2^-j that lowers Phi by at least
         ARMIJO * s * F.du. Returns the relative full step ||du||/||u|| (NaN after a failed solve)."""
@@ -72,7 +80,7 @@ class NewtonSolver(SecantSolver):
         du, previous = petsc_vec(forms.step), petsc_vec(forms.previous)  # the dual update reads both
         problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
         residual = self.assemble_residual().norm()
-        self.newton.assemble_matrix()
+        self.assemble_operator()
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
