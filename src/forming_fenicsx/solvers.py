@@ -164,8 +164,8 @@ def _recent(increments: list[float], count: int = 6) -> str:
 class IterationRecord:
     """One linear solve: outer index m, inner index n, relative increment, elapsed seconds, the
     estimated relative error of the linear solve itself (LinearSolver.error_estimate; NaN on the solves
-    that are not sampled, see SecantSolver.sampled_error), and for Newton steps the residual norm after
-    the step and the line-search step length."""
+    that are not sampled, see SecantSolver.sampled_error), and for Newton steps the norm of the residual
+    F(u) the step was computed from (at its start) and the line-search step length."""
 
     outer: int
     inner: int
