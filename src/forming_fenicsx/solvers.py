@@ -263,10 +263,10 @@ class SecantSolver:
 
     def sampled_error(self, result: SolveResult) -> float:
         """The estimated error of the last linear solve (``self._estimate``) on the run's solves 1, 2, 4,
-        8, ... and NaN on the others; solve() adds it for the last solve of a converged run. Each estimate costs a pair of
-        triangular solves, which scale worst of a run's parts on more ranks; the systems' conditioning
-        changes slowly from iterate to iterate, and the first solves (where a hopeless penalty shows)
-        are all sampled."""
+        8, ... and NaN on the others; solve() adds it for the last solve of a converged run. Each
+        estimate costs a pair of triangular solves, which scale worst of a run's parts on more ranks; the
+        systems' conditioning changes slowly from iterate to iterate, and the first solves (where a
+        hopeless penalty shows) are all sampled."""
         count = result.linear_solves
         return self._estimate() if count & (count - 1) == 0 else math.nan
 
