@@ -34,7 +34,7 @@ class NewtonSolver(SecantSolver):
     def __init__(self, problem, petsc_options=None, balance=None, stop=None):
         super().__init__(problem, petsc_options, balance, stop)
         self.forms = problem.newton_forms()
-        self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual,
+        self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual.parts[0],
                                    matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
         self._velocity = problem.u.copy()
 
@@ -45,8 +45,7 @@ class NewtonSolver(SecantSolver):
     def energy_value(self) -> float:
         """Phi(u) at the current u (collective)."""
         start = time.perf_counter()
-        local = dolfinx.fem.assemble_scalar(self.forms.energy)
-        value = self.problem.comm.allreduce(local)
+        value = self.forms.energy.value(self.problem.comm)
         self.newton.timings.assembly += time.perf_counter() - start
         return value
 
@@ -56,7 +55,7 @@ class NewtonSolver(SecantSolver):
         b, u = self.newton.b, petsc_vec(self.problem.solution)
         with b.localForm() as local:
             local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(b, self.forms.residual)
+        self.forms.residual.add_to(b)
         dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], [self.problem.bcs], [u], -1.0)  # positional:
         # the keyword is scale in dolfinx 0.5 and alpha in 0.9
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
