@@ -1,4 +1,5 @@
-"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the force balance;\ncompiled forms equal their quadrature rules assembled apart."""
+"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the force
+balance; compiled forms equal their quadrature rules assembled apart."""
 import dolfinx.fem
 import dolfinx.fem.petsc
 import pytest

@@ -24,10 +24,11 @@ from .scene import Scene
 
 @dataclass
 class NewtonForms:
-    """What Newton's method needs of a problem (FlowProblem.newton_forms): compiled energy, residual and
-    operator; the dual stress at the Gauss points with the expressions that reset and update it; the
-    operator's material coefficients at the Gauss points (G and (G'/G)/rate at u) with the expression
-    that sets them; the last Newton step du and the iterate before it."""
+    """What Newton's method needs of a problem (FlowProblem.newton_forms): compiled energy and residual
+    (SplitForm), and the operator with its UFL form; the dual stress at the Gauss points with the
+    expressions that reset and update it; the operator's material coefficients at the Gauss points (G
+    and (G'/G)/rate at u) with the expression that sets them; the last Newton step du and the iterate
+    before it."""
 
     energy: SplitForm
     residual: SplitForm
@@ -264,10 +265,10 @@ class FlowProblem:
         penalty enters with its active set at u (semismooth). The regularised friction enters with its
         secant tau_f/sqrt(|u_T|^2 + d_T^2) at u, the linearisation of the direct method (3.13), at a
         fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the nonlocal averaged
-        normal stress is not differentiated, so friction converges linearly in any case). Its
-        consistent tangent, whose curvature near zero slip is about tau_f/d_T, cut the line search's
-        steps on Example 1 with mu = 0.1 (34 solves at h = 0.25, 16 with the secant). The rate is regularised as
-        sqrt(rate^2 + (1e-6 rate1)^2) so that everything stays finite in rigid zones.
+        normal stress is not differentiated, so friction converges linearly in any case). Its tangent,
+        whose curvature near zero slip is about tau_f/d_T, made the line search cut the steps
+        (docs/solvers.md). The rate is regularised as sqrt(rate^2 + (1e-6 rate1)^2) so that everything
+        stays finite in rigid zones.
         """
         scene, material, w = self.scene, self.scene.material, self.solution
         test, trial = ufl.TestFunction(self.system_space), ufl.TrialFunction(self.system_space)
@@ -309,7 +310,8 @@ class FlowProblem:
             energy += 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
             operator += self.volumetric_form(du, v)
         if self.has_contact:  # its second derivative (the active set at u) enters the operator as it is
-            term = 0.5 / scene.penalty.d_N * ufl.max_value(contact.normal_velocity(u, self.n), 0.0) ** 2 * self.ds_contact
+            penetration = ufl.max_value(contact.normal_velocity(u, self.n), 0.0)
+            term = 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
             energy += term
             operator += ufl.derivative(ufl.derivative(term, w, test), w, trial)
         if self.has_friction:  # its secant at u enters the operator, as in (3.13)
