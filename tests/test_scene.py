@@ -57,6 +57,7 @@ BAD = [
     ({"solver": {"method": "bfgs"}}, "solver.method", "direct, modified, newton"),
     ({"solver": {"method": "newton"}}, "solver.method", 'averaging = "quadrature"'),
     ({"solver": {"secant_start": -1}}, "solver.secant_start", "integer >= 0"),
+    ({"solver": {"dual_start": 1.5}}, "solver.dual_start", "[0, 1]"),
     ({"solver": {"max_iterations": 0}}, "solver.max_iterations", ">= 1"),
     ({"solver": {"max_iterations": 2.5}}, "solver.max_iterations", "an integer"),
     ({"material": {"alpha": 1.5}}, "material.alpha", "(2.10)"),

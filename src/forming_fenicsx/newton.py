@@ -3,7 +3,8 @@
 The secant-modulus methods (3.13)/(3.33) converge linearly; Newton's method on the same residual
 (FlowProblem.newton_forms) converges fast once near the answer. Its tangent is only about alpha times
 as stiff as the secant along the flow direction, so the iteration starts from the uniform-modulus
-solution and ``solver.secant_start`` direct secant iterates, and every Newton step is damped by a
+solution and ``solver.secant_start`` direct secant iterates (the dual stress then starts at
+``solver.dual_start`` times tau(u)), and every Newton step is damped by a
 backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
 derivative). It stops with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (and the
 force balance if solver.force_tolerance is set).
@@ -139,7 +140,8 @@ class NewtonSolver(SecantSolver):
             increments.append(self._step(result, 0, inner, start))
             if self._must_stop(result, increments, 0, inner, ""):
                 return result
-        set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)
+        set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
+        self.forms.dual.x.array[:] *= settings.dual_start
         increments = []
         for inner in range(1, settings.max_iterations + 1):
             increment = self._newton_step(result, inner, start)

@@ -215,6 +215,9 @@ class Solver:
     method after ``secant_start`` direct iterates (newton.py, both formulations); all stopped by the rule
     of (4.4).
 
+    ``dual_start``: Newton's dual stress at the switch from the secant iterates, as a fraction of
+    tau(u); below 1 it keeps the first Newton step's stiffness along the flow direction at about
+    (1 - dual_start) times the secant's instead of alpha times (docs/solvers.md).
     ``stall_window``: inner iterations (a fifth of it for outer ones) without a new smallest increment
     after which the run stops as stalled or oscillating. ``force_tolerance`` (0: off, as in the
     paper) also requires the x force balance residual
@@ -224,6 +227,7 @@ class Solver:
     method: str = "modified"
     tolerance: float = 1e-4
     secant_start: int = 3
+    dual_start: float = 0.99
     max_iterations: int = 200
     max_outer_iterations: int = 50
     stall_window: int = 40
@@ -237,6 +241,10 @@ class Solver:
             raise SceneError("solver.method", f"must be one of direct, modified, newton; got {self.method!r}")
         if not (isinstance(self.secant_start, int) and self.secant_start >= 0):
             raise SceneError("solver.secant_start", f"must be an integer >= 0; got {self.secant_start!r}")
+        start = self.dual_start
+        if isinstance(start, bool) or not (isinstance(start, (int, float)) and 0 <= start <= 1):
+            raise SceneError("solver.dual_start",
+                             f"must lie in [0, 1] (a fraction of the stress); got {self.dual_start!r}")
         if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
             raise SceneError("solver.tolerance", f"must lie in (0, 1) (delta of (4.4)); got {self.tolerance}")
         for key in ("max_iterations", "max_outer_iterations", "stall_window"):
