@@ -50,6 +50,7 @@ def quadrature_degree(element_degree: int, reduced: bool) -> int:
 
 
 ONE_POINT_DEGREE = 1  # Gauss rules up to this degree have a single point on quadrilaterals
+SLOW_SLIP = 1e-2  # Newton's operator takes friction's secant where |u_T| < SLOW_SLIP * process velocity
 
 
 @dataclass
@@ -262,11 +263,12 @@ class FlowProblem:
         when tau_h = tau(u), and with |tau_h| <= sigma_p(rate) (the cap) its smallest eigenvalue is alpha
         times the secant's, so the operator is symmetric positive definite with the penalty (Cholesky)
         and every Newton step is a descent direction of Phi. The contact
-        penalty enters with its active set at u (semismooth). The regularised friction enters with its
-        secant tau_f/sqrt(|u_T|^2 + d_T^2) at u, the linearisation of the direct method (3.13), at a
+        penalty enters with its active set at u (semismooth). The regularised friction enters at a
         fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the nonlocal averaged
-        normal stress is not differentiated, so friction converges linearly in any case). Its tangent,
-        whose curvature near zero slip is about tau_f/d_T, made the line search cut the steps
+        normal stress is not differentiated) with its tangent where the die point slips faster than
+        SLOW_SLIP times the process velocity, and with its secant tau_f/sqrt(|u_T|^2 + d_T^2), the
+        linearisation of the direct method (3.13), where it slips slower or sticks: there the
+        tangent's curvature, about tau_f/d_T near zero slip, made the line search cut the steps
         (docs/solvers.md). The rate is regularised as sqrt(rate^2 + (1e-6 rate1)^2) so that everything
         stays finite in rigid zones.
         """
@@ -314,12 +316,16 @@ class FlowProblem:
             term = 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
             energy += term
             operator += ufl.derivative(ufl.derivative(term, w, test), w, trial)
-        if self.has_friction:  # its secant at u enters the operator, as in (3.13)
+        if self.has_friction:  # its secant at u, plus the rest of its tangent where the die point slips fast
             slip = friction.tangential(u, self.n)
             tau_f = friction.friction_bound(scene.friction.mu, self.normal_pressure())
             energy += tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact
             coefficient = friction.slip_coefficient(tau_f, u, self.n, scene.friction.d_T)
             operator += friction.friction_form(du, v, coefficient, self.n, self.ds_contact)
+            fast = ufl.conditional(ufl.gt(ufl.dot(slip, slip), (SLOW_SLIP * scene.process.velocity) ** 2), 1.0, 0.0)
+            du_T, v_T = friction.tangential(du, self.n), friction.tangential(v, self.n)
+            operator -= (fast * coefficient * ufl.dot(slip, du_T) * ufl.dot(slip, v_T)
+                         / (ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact)
         if self.has_force:
             energy -= ufl.action(self._load(v), w)
         residual = ufl.derivative(energy, w, test)
