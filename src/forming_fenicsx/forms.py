@@ -50,7 +50,6 @@ def quadrature_degree(element_degree: int, reduced: bool) -> int:
 
 
 ONE_POINT_DEGREE = 1  # Gauss rules up to this degree have a single point on quadrilaterals
-SLOW_SLIP = 1e-2  # Newton's operator takes friction's secant where |u_T| < SLOW_SLIP * process velocity
 
 
 @dataclass
@@ -266,7 +265,7 @@ class FlowProblem:
         penalty enters with its active set at u (semismooth). The regularised friction enters at a
         fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the nonlocal averaged
         normal stress is not differentiated) with its tangent where the die point slips faster than
-        SLOW_SLIP times the process velocity, and with its secant tau_f/sqrt(|u_T|^2 + d_T^2), the
+        friction.SLOW_SLIP times the process velocity, and with its secant tau_f/sqrt(|u_T|^2 + d_T^2), the
         linearisation of the direct method (3.13), where it slips slower or sticks: there the
         tangent's curvature, about tau_f/d_T near zero slip, made the line search cut the steps
         (docs/solvers.md). The rate is regularised as sqrt(rate^2 + (1e-6 rate1)^2) so that everything
@@ -316,16 +315,11 @@ class FlowProblem:
             term = 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
             energy += term
             operator += ufl.derivative(ufl.derivative(term, w, test), w, trial)
-        if self.has_friction:  # its secant at u, plus the rest of its tangent where the die point slips fast
-            slip = friction.tangential(u, self.n)
-            tau_f = friction.friction_bound(scene.friction.mu, self.normal_pressure())
-            energy += tau_f * ufl.sqrt(ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact
-            coefficient = friction.slip_coefficient(tau_f, u, self.n, scene.friction.d_T)
-            operator += friction.friction_form(du, v, coefficient, self.n, self.ds_contact)
-            fast = ufl.conditional(ufl.gt(ufl.dot(slip, slip), (SLOW_SLIP * scene.process.velocity) ** 2), 1.0, 0.0)
-            du_T, v_T = friction.tangential(du, self.n), friction.tangential(v, self.n)
-            operator -= (fast * coefficient * ufl.dot(slip, du_T) * ufl.dot(slip, v_T)
-                         / (ufl.dot(slip, slip) + scene.friction.d_T**2) * self.ds_contact)
+        if self.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
+            tau_f, d_T = friction.friction_bound(scene.friction.mu, self.normal_pressure()), scene.friction.d_T
+            energy += friction.regularised_functional(tau_f, u, self.n, d_T) * self.ds_contact
+            operator += friction.newton_form(du, v, u, tau_f, self.n, d_T,
+                                             friction.SLOW_SLIP * abs(scene.process.velocity), self.ds_contact)
         if self.has_force:
             energy -= ufl.action(self._load(v), w)
         residual = ufl.derivative(energy, w, test)

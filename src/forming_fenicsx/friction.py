@@ -36,6 +36,29 @@ def friction_form(u, v, coefficient, n, ds_contact):
     return coefficient * ufl.dot(tangential(u, n), tangential(v, n)) * ds_contact
 
 
+SLOW_SLIP = 1e-2  # Newton's operator takes the secant where |u_T| < SLOW_SLIP * process velocity
+
+
+def regularised_functional(tau_f, u, n, d_T: float):
+    """Integrand of j_dT(w, u) = int tau_f(w) sqrt(|u_T|^2 + d_T^2) of (3.11)."""
+    slip = tangential(u, n)
+    return tau_f * ufl.sqrt(ufl.dot(slip, slip) + d_T**2)
+
+
+def newton_form(du, v, u, tau_f, n, d_T: float, slow_slip: float, ds_contact):
+    """Friction's part of Newton's operator at u (tau_f fixed): the secant form of (3.13) where the die
+    point slips slower than ``slow_slip`` or sticks, the tangent of (3.11) where it slips faster. Near
+    zero slip the tangent's curvature is about tau_f/d_T, which made Newton's line search cut the steps
+    (docs/solvers.md); in fast slip the tangent keeps the steps quadratic."""
+    slip = tangential(u, n)
+    coefficient = slip_coefficient(tau_f, u, n, d_T)
+    fast = ufl.conditional(ufl.gt(ufl.dot(slip, slip), slow_slip**2), 1.0, 0.0)
+    du_T, v_T = tangential(du, n), tangential(v, n)
+    return (friction_form(du, v, coefficient, n, ds_contact)
+            - fast * coefficient * ufl.dot(slip, du_T) * ufl.dot(slip, v_T) / (ufl.dot(slip, slip) + d_T**2)
+            * ds_contact)
+
+
 def friction_traction(coefficient, u_state, n):
     """Friction stress on the workpiece, sigma_T = -c_T u_T (opposes the slip)."""
     return -coefficient * tangential(u_state, n)
