@@ -40,6 +40,12 @@ def cell_geometry_nodes(mesh) -> np.ndarray:
     return np.asarray(dofmap)
 
 
+def original_cell_index(mesh) -> np.ndarray:
+    """The index each local cell had in the cell list the mesh was created from."""
+    index = mesh.topology.original_cell_index
+    return np.asarray(index if LEGACY else index[0] if isinstance(index, list) else index)
+
+
 def geometry_degree(mesh) -> int:
     """Polynomial degree of the coordinate map."""
     return mesh.geometry.cmap.degree
@@ -80,6 +86,24 @@ def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx
     block = dofmap.index_map_bs
     function.x.array.reshape(-1, block)[dofs.ravel()] = values.reshape(dofs.size, block)
     function.x.scatter_forward()
+
+
+def model_to_mesh(model, comm, graph_partitioner):
+    """(mesh, cell tags, facet tags) of a 2D Gmsh model on rank 0, its cells distributed by
+    ``graph_partitioner`` (comm, parts, dual graph, ghosting) -> destinations. Ghost cells as each
+    release's gmshio makes them by default: across shared facets in 0.5, none in 0.9."""
+    from dolfinx.io import gmshio
+
+    if LEGACY:  # 0.5's model_to_mesh takes no partitioner: hand one to the create_mesh it calls
+        from functools import partial
+        from unittest import mock
+
+        partitioner = dolfinx.cpp.mesh.create_cell_partitioner(graph_partitioner)
+        with mock.patch.object(gmshio, "create_mesh", partial(dolfinx.mesh.create_mesh, partitioner=partitioner)):
+            return gmshio.model_to_mesh(model, comm, 0, gdim=2)
+    partitioner = dolfinx.mesh.create_cell_partitioner(graph_partitioner, dolfinx.mesh.GhostMode.none)
+    mesh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, 0, gdim=2, partitioner=partitioner)[:3]
+    return mesh, cell_tags, facet_tags
 
 
 def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degree: int):
