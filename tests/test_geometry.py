@@ -138,7 +138,7 @@ def test_band_partition_cuts_a_strip_across_and_lists_the_ghosts(parts):
         expected = set(owner[neighbours[offsets[cell]:offsets[cell + 1]]]) - {owner[cell]}
         assert sorted(ghosts.tolist()) == sorted(expected)
     again = band_partition(offsets, neighbours, parts, ghosting=True)
-    assert all(np.array_equal(a, b) for a, b in zip(again, (destination_offsets, destinations)))
+    assert all(np.array_equal(a, b) for a, b in zip(again, (destination_offsets, destinations), strict=True))
     plain_offsets, plain = band_partition(offsets, neighbours, parts, ghosting=False)
     assert np.array_equal(plain, owner) and np.array_equal(plain_offsets, np.arange(361))
 

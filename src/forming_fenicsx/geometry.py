@@ -312,11 +312,11 @@ def repeatable_partition(comm: MPI.Comm, parts: int, graph, ghosting: bool):
     if comm.rank == 0:
         try:  # a failure here must reach every rank, which wait in scatter
             starts = np.cumsum([0] + [len(array) for _, array in gathered])
-            offsets = np.concatenate([[0]] + [o[1:] + start for (o, _), start in zip(gathered, starts)])
+            offsets = np.concatenate([[0]] + [o[1:] + start for (o, _), start in zip(gathered, starts[:-1], strict=True)])
             offsets, array = band_partition(offsets, np.concatenate([a for _, a in gathered]), parts, ghosting)
             first = np.cumsum([0] + [len(o) - 1 for o, _ in gathered])  # each rank's first cell
             pieces = [(offsets[a:b + 1] - offsets[a], array[offsets[a]:offsets[b]])
-                      for a, b in zip(first, first[1:])]
+                      for a, b in zip(first[:-1], first[1:], strict=True)]
         except Exception as error:  # noqa: BLE001 - re-raised on every rank below
             pieces = error
     failure = comm.bcast(pieces if isinstance(pieces, Exception) else None)
