@@ -88,24 +88,6 @@ def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx
     function.x.scatter_forward()
 
 
-def model_to_mesh(model, comm, graph_partitioner):
-    """(mesh, cell tags, facet tags) of a 2D Gmsh model on rank 0, its cells distributed by
-    ``graph_partitioner`` (comm, parts, dual graph, ghosting) -> destinations. Ghost cells as each
-    release's gmshio makes them by default: across shared facets in 0.5, none in 0.9."""
-    from dolfinx.io import gmshio
-
-    if LEGACY:  # 0.5's model_to_mesh takes no partitioner: hand one to the create_mesh it calls
-        from functools import partial
-        from unittest import mock
-
-        partitioner = dolfinx.cpp.mesh.create_cell_partitioner(graph_partitioner)
-        with mock.patch.object(gmshio, "create_mesh", partial(dolfinx.mesh.create_mesh, partitioner=partitioner)):
-            return gmshio.model_to_mesh(model, comm, 0, gdim=2)
-    partitioner = dolfinx.mesh.create_cell_partitioner(graph_partitioner, dolfinx.mesh.GhostMode.none)
-    mesh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, 0, gdim=2, partitioner=partitioner)[:3]
-    return mesh, cell_tags, facet_tags
-
-
 def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degree: int):
     """The velocity-pressure space (vector Lagrange x ``pressure_family``, e.g. "DPC" for P1 discontinuous
     on quadrilaterals)."""

@@ -7,6 +7,7 @@ Gamma5 applied force (2.7), Gamma6 symmetry (2.8).
 from __future__ import annotations
 
 import math
+import os
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +16,6 @@ import gmsh
 import numpy as np
 from mpi4py import MPI
 
-from .compat import model_to_mesh
 from .errors import SceneError
 from .scene import Scene
 
@@ -275,61 +275,27 @@ def _check_msh(path: str) -> dict[int, int]:
     return {tag: ROLES[name] for tag, name in names.items()}
 
 
-def band_partition(offsets: np.ndarray, neighbours: np.ndarray, parts: int, ghosting: bool):
-    """Destinations of the cells of a dual graph (CSR) in ``parts`` bands of equal size along its reverse
-    Cuthill-McKee order: each band is a run of the level sets of a breadth-first sweep from a peripheral
-    cell, so on the long, narrow workpieces of Fig. 1 the cuts run across the strip. Deterministic.
-    Returns (offsets, destinations): each cell's owner, then (with ``ghosting``) the other owners of its
-    neighbours, the ranks that ghost it."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import reverse_cuthill_mckee
-
-    cells = len(offsets) - 1
-    graph = csr_matrix((np.ones(len(neighbours)), neighbours, offsets), shape=(cells, cells))
-    owner = np.empty(cells, dtype=np.int32)
-    owner[reverse_cuthill_mckee(graph, symmetric_mode=True)] = np.arange(cells, dtype=np.int64) * parts // cells
-    rows = np.repeat(np.arange(cells), np.diff(offsets))
-    pairs = np.unique(np.column_stack([rows, owner[neighbours]]), axis=0) if ghosting else np.empty((0, 2), int)
-    pairs = pairs[pairs[:, 1] != owner[pairs[:, 0]]]
-    counts = 1 + np.bincount(pairs[:, 0], minlength=cells)
-    destination_offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-    destinations = np.empty(destination_offsets[-1], dtype=np.int32)
-    destinations[destination_offsets[:-1]] = owner
-    ghost_slots = np.setdiff1d(np.arange(destination_offsets[-1]), destination_offsets[:-1])
-    destinations[ghost_slots] = pairs[:, 1]  # pairs are sorted by cell, as the slots
-    return destination_offsets, destinations
-
-
-def repeatable_partition(comm: MPI.Comm, parts: int, graph, ghosting: bool):
-    """A graph partitioner for dolfinx's cell partitioner that gives the same partition in every run:
-    band_partition on rank 0 over the gathered dual graph. dolfinx's SCOTCH partition changes from run
-    to run (in parallel and, through its threads, serially too), and the results and solve counts on
-    several ranks with it."""
-    from dolfinx.cpp.graph import AdjacencyList_int32
-
-    gathered = comm.gather((np.asarray(graph.offsets, dtype=np.int64), np.asarray(graph.array, dtype=np.int64)))
-    pieces: list | Exception | None = None
-    if comm.rank == 0:
-        try:  # a failure here must reach every rank, which wait in scatter
-            starts = np.cumsum([0] + [len(array) for _, array in gathered])
-            offsets = np.concatenate([[0]] + [o[1:] + start for (o, _), start in zip(gathered, starts[:-1], strict=True)])
-            offsets, array = band_partition(offsets, np.concatenate([a for _, a in gathered]), parts, ghosting)
-            first = np.cumsum([0] + [len(o) - 1 for o, _ in gathered])  # each rank's first cell
-            pieces = [(offsets[a:b + 1] - offsets[a], array[offsets[a]:offsets[b]])
-                      for a, b in zip(first[:-1], first[1:], strict=True)]
-        except Exception as error:  # noqa: BLE001 - re-raised on every rank below
-            pieces = error
-    failure = comm.bcast(pieces if isinstance(pieces, Exception) else None)
-    if failure is not None:
-        raise RuntimeError(f"partitioning the mesh failed on rank 0: {failure}")
-    offsets, array = comm.scatter(pieces)
-    return AdjacencyList_int32(array.astype(np.int32), offsets.astype(np.int32))
+@contextmanager
+def _one_scotch_thread():
+    """SCOTCH, dolfinx's partitioner, on one thread per rank (Scotch 7 reads SCOTCH_PTHREAD_NUMBER at
+    each call): with its threads the partition changes from run to run, and with it the results and
+    solve counts on several ranks. The variable is restored afterwards."""
+    previous = os.environ.get("SCOTCH_PTHREAD_NUMBER")
+    os.environ["SCOTCH_PTHREAD_NUMBER"] = "1"
+    try:
+        yield
+    finally:
+        if previous is None:
+            del os.environ["SCOTCH_PTHREAD_NUMBER"]
+        else:
+            os.environ["SCOTCH_PTHREAD_NUMBER"] = previous
 
 
 def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
-    or read and check the scene's own .msh file (geometry.mesh_file). The cells are partitioned by
-    repeatable_partition, so a run on several ranks repeats exactly."""
+    or read and check the scene's own .msh file (geometry.mesh_file). The partition repeats from run to
+    run (_one_scotch_thread)."""
+    from dolfinx.io import gmshio
     from dolfinx.mesh import meshtags
 
     mesh_file = scene.geometry.mesh_file
@@ -345,7 +311,8 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
         outcome = comm.bcast(outcome, root=0)
         if isinstance(outcome, SceneError):
             raise outcome
-        mesh, _, facet_tags = model_to_mesh(gmsh.model, comm, repeatable_partition)
+        with _one_scotch_thread():
+            mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
     if outcome is not None:  # the file's tags -> the roles' tags
         values = np.array([outcome[int(v)] for v in facet_tags.values], dtype=np.int32)
         facet_tags = meshtags(mesh, mesh.topology.dim - 1, facet_tags.indices, values)
