@@ -278,8 +278,8 @@ def _check_msh(path: str) -> dict[int, int]:
 @contextmanager
 def _one_scotch_thread():
     """SCOTCH, dolfinx's partitioner, on one thread per rank (Scotch 7 reads SCOTCH_PTHREAD_NUMBER at
-    each call): with its threads the partition changes from run to run, and with it the results and
-    solve counts on several ranks. The variable is restored afterwards."""
+    each call): with its threads the partition changes from run to run, and with it the dof numbering
+    and MUMPS' ordering on several ranks. The variable is restored afterwards."""
     previous = os.environ.get("SCOTCH_PTHREAD_NUMBER")
     os.environ["SCOTCH_PTHREAD_NUMBER"] = "1"
     try:
