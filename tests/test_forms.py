@@ -7,7 +7,7 @@ import ufl
 from petsc4py import PETSc
 
 from forming_fenicsx.compat import petsc_vec
-from forming_fenicsx.forms import FlowProblem, quadrature_degree
+from forming_fenicsx.forms import FlowProblem, SplitForm, quadrature_degree
 from forming_fenicsx.geometry import build_mesh
 from forming_fenicsx.solvers import SecantSolver
 
@@ -50,22 +50,17 @@ def test_front_tension_lowers_the_ram_force_and_keeps_the_balance():
     assert pulled["ram_force"] < free["ram_force"] - 0.1
 
 
-def _by_rule(form) -> list:
-    """The form's integrals grouped by integral type and quadrature degree, each group compiled alone."""
+def _rules(form) -> list[ufl.Form]:
+    """The form's integrals grouped by integral type and quadrature degree, one form per group."""
     groups: dict = {}
     for integral in form.integrals():
         groups.setdefault((integral.integral_type(), integral.metadata().get("quadrature_degree")), []).append(integral)
-    return [dolfinx.fem.form(ufl.Form(group)) for group in groups.values()]
+    return [ufl.Form(group) for group in groups.values()]
 
 
-def _vector(parts) -> PETSc.Vec:
-    b = dolfinx.fem.petsc.create_vector(parts[0])
-    with b.localForm() as local:
-        local.set(0.0)
-    for part in parts:
-        dolfinx.fem.petsc.assemble_vector(b, part)
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    return b
+def _apart(form) -> SplitForm:
+    """The form with each of its rules compiled alone."""
+    return SplitForm(form, [dolfinx.fem.form(rule) for rule in _rules(form)])
 
 
 def _matrix_action(parts, x: PETSc.Vec) -> PETSc.Vec:
@@ -89,7 +84,7 @@ def _relative(a: PETSc.Vec, b: PETSc.Vec, scale: float | None = None) -> float:
 def _term_scale(form) -> float:
     """The sum of the norms of a linear form's rules assembled apart: the size of the terms whose sum
     (a residual near a solution) is far smaller; rounding errors are relative to it."""
-    return sum(_vector([part]).norm() for part in _by_rule(form))
+    return sum(_apart(rule).vector().norm() for rule in _rules(form))
 
 
 @pytest.mark.parametrize("element", ["Q1", "Q2"])
@@ -111,17 +106,15 @@ def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
     SecantSolver(problem).solve()
     problem.update_state(problem.u, friction_too=True)
     forms = problem.newton_forms()
-    newton_residual = _vector(forms.residual.parts)
-    secant_residual = _vector(problem.residual.parts)
+    newton_residual, secant_residual = forms.residual.vector(), problem.residual.vector()
     scale = _term_scale(forms.residual.ufl)
-    assert _relative(newton_residual, _vector(_by_rule(forms.residual.ufl)), scale) < 1e-13
-    assert _relative(secant_residual, _vector(_by_rule(problem.residual.ufl)), scale) < 1e-13
+    assert _relative(newton_residual, _apart(forms.residual.ufl).vector(), scale) < 1e-13
+    assert _relative(secant_residual, _apart(problem.residual.ufl).vector(), scale) < 1e-13
     assert _relative(newton_residual, secant_residual, scale) < 1e-12
     energy = forms.energy.value(problem.comm)
-    apart = sum(problem.comm.allreduce(dolfinx.fem.assemble_scalar(part)) for part in _by_rule(forms.energy.ufl))
-    assert energy == pytest.approx(apart, rel=1e-12)
+    assert energy == pytest.approx(_apart(forms.energy.ufl).value(problem.comm), rel=1e-12)
     x = petsc_vec(problem.u).duplicate()
     x.setRandom(PETSc.Random().create(problem.comm))
     for compiled, form in ((problem.a, problem.a_ufl), (forms.operator, forms.operator_ufl)):
-        assert _relative(_matrix_action([compiled], x), _matrix_action(_by_rule(form), x)) < 1e-12
+        assert _relative(_matrix_action([compiled], x), _matrix_action(_apart(form).parts, x)) < 1e-12
     assert len(forms.residual.parts) == (2 if element == "Q1" else 1)

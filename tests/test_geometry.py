@@ -113,7 +113,6 @@ def test_msh_file_has_named_roles(tmp_path):
     assert len(nodes[0]) % 9 == 0  # nine-node quadrilaterals by default (Q2)
 
 
-
 def test_mesh_partition_repeats(monkeypatch):
     """Eight builds of the same mesh distribute its cells alike (with SCOTCH's threads, one build in
     six differed on this mesh), in balanced parts, and SCOTCH_PTHREAD_NUMBER is left as it was."""

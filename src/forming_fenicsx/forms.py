@@ -68,6 +68,15 @@ class SplitForm:
         for part in self.parts:
             dolfinx.fem.petsc.assemble_vector(b, part)
 
+    def vector(self) -> PETSc.Vec:
+        """The assembled linear form in a new vector, ghost contributions added to their owners."""
+        b = dolfinx.fem.petsc.create_vector(self.parts[0])
+        with b.localForm() as local:
+            local.set(0.0)
+        self.add_to(b)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return b
+
 
 def split_form(form: ufl.Form, apart_degree: int | None) -> SplitForm:
     """The form compiled as one, or with its integrals of quadrature degree ``apart_degree`` compiled

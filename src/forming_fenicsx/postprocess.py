@@ -30,11 +30,7 @@ def _integrate(problem: FlowProblem, integrand) -> float:
 def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
     """Force the constraint on ``role`` exerts on the workpiece along its component: the residual summed
     over the constrained dofs."""
-    residual = dolfinx.fem.petsc.create_vector(problem.residual.parts[0])
-    with residual.localForm() as local:
-        local.set(0.0)
-    problem.residual.add_to(residual)
-    residual.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    residual = problem.residual.vector()
     component = next(c.component for c in problem.constraints if c.role == role)
     dofs = problem.boundary_dofs(role, component)
     owned = problem.V.dofmap.index_map.size_local * problem.V.dofmap.index_map_bs
