@@ -6,8 +6,9 @@ as stiff as the secant along the flow direction, so the iteration starts from th
 solution and ``solver.secant_start`` direct secant iterates (the dual stress then starts at
 ``solver.dual_start`` times tau(u)), and every Newton step is damped by a
 backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
-derivative). It stops with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (and the
-force balance if solver.force_tolerance is set).
+derivative), or lengthened while Phi keeps falling when a full step would not yet meet delta. It stops
+with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (on the step taken when that was
+longer), and the force balance if solver.force_tolerance is set.
 """
 from __future__ import annotations
 
@@ -26,6 +27,16 @@ ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the fi
 MAX_HALVINGS = 12   # smallest step 2**-12
 
 
+def parabola_step(energy0: float, energy1: float, energy2: float) -> float | None:
+    """The minimiser, strictly between 1 and 2, of the parabola through Phi(0), Phi(1) and Phi(2) along a
+    Newton direction; None when the parabola is not convex or its minimiser lies outside (1, 2)."""
+    curvature = energy2 - 2.0 * energy1 + energy0  # twice the parabola's leading coefficient
+    if not curvature > 0:
+        return None
+    fitted = 0.5 + (energy0 - energy1) / curvature
+    return fitted if 1.0 < fitted < 2.0 else None
+
+
 class NewtonSolver(SecantSolver):
     """Newton's method (solver.method = "newton") after a few direct secant iterates.
 
@@ -37,10 +48,12 @@ class NewtonSolver(SecantSolver):
         self.forms = problem.newton_forms()
         self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual.parts[0],
                                    matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
-        self._velocity = problem.u.copy()
+        self._velocity = problem.u.copy()  # the velocity before the current step
+        self._change = petsc_vec(problem.u).duplicate()
 
     def destroy(self) -> None:
         self.newton.destroy()
+        self._change.destroy()
         super().destroy()
 
     def energy_value(self) -> float:
@@ -73,8 +86,9 @@ class NewtonSolver(SecantSolver):
         self.newton.assemble_matrix()
 
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
-        """Solve J du = F at u, then u <- u - s du with the largest s = 2^-j that lowers Phi by at least
-        ARMIJO * s * F.du. Returns the relative full step ||du||/||u|| (NaN after a failed solve)."""
+        """Solve J du = F at u, then u <- u - s du with s from the line search (_line_search). Returns the
+        relative change ||du||/||u|| of the full step, or of the step taken when longer (NaN after a failed
+        solve)."""
         forms = self.forms
         problem, u = self.problem, petsc_vec(self.problem.solution)
         du, previous = petsc_vec(forms.step), petsc_vec(forms.previous)  # the dual update reads both
@@ -96,19 +110,8 @@ class NewtonSolver(SecantSolver):
         u.copy(previous)
         forms.previous.x.scatter_forward()
         petsc_vec(problem.u).copy(petsc_vec(self._velocity))
-        step = 1.0
-        for _ in range(MAX_HALVINGS + 1):
-            previous.copy(u)
-            u.axpy(-step, du)
-            problem.after_solve()
-            if self.energy_value() <= energy0 - ARMIJO * step * slope:
-                break
-            step *= 0.5
-        # the full step's velocity part relative to the new velocity: the rule of (4.4)
-        change = petsc_vec(self._velocity)
-        change.axpy(-1.0, petsc_vec(problem.u))
-        norm = petsc_vec(problem.u).norm()
-        increment = change.norm() / (step * norm) if norm > 0 else math.inf
+        step = self._line_search(energy0, slope)
+        increment = self._relative_change() / min(step, 1.0)  # (4.4): the full step, or the longer one taken
         if not math.isfinite(increment):
             previous.copy(u)
             problem.after_solve()
@@ -120,6 +123,46 @@ class NewtonSolver(SecantSolver):
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  (%.1f s)", inner, increment,
                      residual, step, record.elapsed)
         return increment
+
+    def _relative_change(self) -> float:
+        """||u - u_before|| / ||u|| of the velocity over the current Newton step."""
+        change, velocity = self._change, petsc_vec(self.problem.u)
+        velocity.copy(change)
+        change.axpy(-1.0, petsc_vec(self._velocity))
+        norm = velocity.norm()
+        return change.norm() / norm if norm > 0 else math.inf
+
+    def _line_search(self, energy0: float, slope: float) -> float:
+        """Move u to previous - s du and return s: the largest s = 2^-j that lowers Phi by at least
+        ARMIJO * s * F.du; a full step that does not yet meet delta is lengthened to the best of s = 1,
+        s = 2 and the minimiser of the parabola through Phi at s = 0, 1, 2 (parabola_step). Near the answer
+        the minimum of Phi along -du often lies beyond the full step: while the dual stress differs from
+        tau(u), the operator is stiffer than the consistent tangent along the flow direction
+        (docs/solvers.md)."""
+        step, energy = 1.0, self._move(1.0)
+        for _ in range(MAX_HALVINGS):
+            if energy <= energy0 - ARMIJO * step * slope:
+                break
+            step *= 0.5
+            energy = self._move(step)
+        if step < 1.0 or self._relative_change() < self.settings.tolerance:
+            return step
+        tried = [(energy, 1.0), (self._move(2.0), 2.0)]
+        fitted = parabola_step(energy0, energy, tried[1][0])
+        if fitted is not None:
+            tried.append((self._move(fitted), fitted))
+        best = min(tried)[1]
+        if best != tried[-1][1]:
+            self._move(best, energy=False)
+        return best
+
+    def _move(self, step: float, energy: bool = True) -> float:
+        """u = previous - step du (and the problem's state with it); returns Phi(u), or NaN if not asked."""
+        u, du, previous = (petsc_vec(f) for f in (self.problem.solution, self.forms.step, self.forms.previous))
+        previous.copy(u)
+        u.axpy(-step, du)
+        self.problem.after_solve()
+        return self.energy_value() if energy else math.nan
 
     def timings(self) -> Timings:
         return self.linear.timings + self.newton.timings
