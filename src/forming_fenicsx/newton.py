@@ -8,7 +8,7 @@ solution and ``solver.secant_start`` direct secant iterates (the dual stress the
 backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
 derivative), or lengthened while Phi keeps falling when a full step would not yet meet delta. It stops
 with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (on the step taken when that was
-longer), and the force balance if solver.force_tolerance is set.
+longer) after a step taken in full, and the force balance if solver.force_tolerance is set.
 """
 from __future__ import annotations
 
@@ -191,7 +191,9 @@ class NewtonSolver(SecantSolver):
             increments.append(increment)
             if self._must_stop(result, increments, 0, inner, friction_note):
                 return result
-            if increment < settings.tolerance and self._balanced(result):
+            # a step the line search cut does not end the run: its short full step says little about the
+            # distance to the answer when the energy along it is far from the Newton model
+            if increment < settings.tolerance and result.history[-1].step >= 1.0 and self._balanced(result):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
