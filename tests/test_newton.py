@@ -147,7 +147,7 @@ def test_newton_ends_only_after_a_step_taken_in_full():
     assert newton["force_balance_residual"] < 1e-4
 
 
-
+@pytest.mark.parametrize("formulation, events", [("penalty", ("MatCholFctrSym", "MatCholFctrNum")),
                                                   ("mixed", ("MatLUFactorSym", "MatLUFactorNum"))])
 def test_newton_shares_the_secant_matrix_one_symbolic_factorisation(formulation, events):
     """The secant start and the Newton steps assemble into one matrix: MUMPS analyses its pattern once
