@@ -108,6 +108,14 @@ def test_newton_q1_reduced_extrusion():
     assert newton["ram_pressure"] == pytest.approx(reference["ram_pressure"], rel=1e-4)
 
 
+def newton_on_demo(*settings: str):
+    """Newton on Example 1's demo scene with the given overrides (no files): the result and summary."""
+    _, result, summary = solve_scene(load_scene(DEMO, [
+        "solver.method=newton", "discretisation.averaging=quadrature", "output.fields=false",
+        "output.figures=false", *settings]))
+    return result, summary
+
+
 def test_parabola_step_is_the_minimiser_between_one_and_two():
     """The line search's longer step: the minimiser of the parabola through Phi(0), Phi(1), Phi(2)."""
     def values(phi):
@@ -124,13 +132,12 @@ def test_newton_lengthens_full_steps_in_the_slow_tail():
     needed 16 linear solves, its increments falling slowly over six full steps while the minimum of Phi
     along -du lay beyond the full step; with the longer steps of the line search it needs 12 (measured).
     The answer is that of a run at delta = 1e-6."""
-    settings = ["solver.method=newton", "discretisation.averaging=quadrature", "discretisation.element=Q1",
-                "discretisation.mesh_size=0.0625", "output.fields=false", "output.figures=false"]
-    _, result, newton = solve_scene(load_scene(DEMO, settings))
+    settings = ["discretisation.element=Q1", "discretisation.mesh_size=0.0625"]
+    result, newton = newton_on_demo(*settings)
     steps = [record.step for record in result.history if not np.isnan(record.residual)]
     assert newton["converged"] and newton["linear_solves"] <= 14
     assert max(steps) > 1.0
-    tight = solve_scene(load_scene(DEMO, [*settings, "solver.tolerance=1e-6"]))[2]
+    tight = newton_on_demo(*settings, "solver.tolerance=1e-6")[1]
     assert newton["ram_pressure"] == pytest.approx(tight["ram_pressure"], rel=1e-4)
 
 
@@ -139,9 +146,7 @@ def test_newton_ends_only_after_a_step_taken_in_full():
     step had a full step below delta but the line search cut it to 1/32; ending there gave a ram
     pressure 1.3e-3 from the answer and a force balance residual of 1.3e-3 (measured). A run ends only
     after a step taken in full: 14 solves, force balance 2.9e-5 (measured)."""
-    settings = ["solver.method=newton", "discretisation.averaging=quadrature", "discretisation.mesh_size=0.09",
-                "output.fields=false", "output.figures=false"]
-    _, result, newton = solve_scene(load_scene(DEMO, settings))
+    result, newton = newton_on_demo("discretisation.mesh_size=0.09")
     assert newton["converged"] and newton["linear_solves"] <= 15
     assert result.history[-1].step >= 1.0
     assert newton["force_balance_residual"] < 1e-4

@@ -113,8 +113,7 @@ class NewtonSolver(SecantSolver):
         step = self._line_search(energy0, slope)
         increment = self._relative_change() / min(step, 1.0)  # (4.4): the full step, or the longer one taken
         if not math.isfinite(increment):
-            previous.copy(u)
-            problem.after_solve()
+            self._move(0.0)
         else:
             set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
         record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step)
@@ -139,30 +138,34 @@ class NewtonSolver(SecantSolver):
         the minimum of Phi along -du often lies beyond the full step: while the dual stress differs from
         tau(u), the operator is stiffer than the consistent tangent along the flow direction
         (docs/solvers.md)."""
-        step, energy = 1.0, self._move(1.0)
+        step, energy = 1.0, self._energy_at(1.0)
         for _ in range(MAX_HALVINGS):
             if energy <= energy0 - ARMIJO * step * slope:
                 break
             step *= 0.5
-            energy = self._move(step)
+            energy = self._energy_at(step)
         if step < 1.0 or self._relative_change() < self.settings.tolerance:
             return step
-        tried = [(energy, 1.0), (self._move(2.0), 2.0)]
+        tried = [(energy, 1.0), (self._energy_at(2.0), 2.0)]
         fitted = parabola_step(energy0, energy, tried[1][0])
         if fitted is not None:
-            tried.append((self._move(fitted), fitted))
+            tried.append((self._energy_at(fitted), fitted))
         best = min(tried)[1]
         if best != tried[-1][1]:
-            self._move(best, energy=False)
+            self._move(best)
         return best
 
-    def _move(self, step: float, energy: bool = True) -> float:
-        """u = previous - step du (and the problem's state with it); returns Phi(u), or NaN if not asked."""
+    def _move(self, step: float) -> None:
+        """u = previous - step du, and the problem's state with it."""
         u, du, previous = (petsc_vec(f) for f in (self.problem.solution, self.forms.step, self.forms.previous))
         previous.copy(u)
         u.axpy(-step, du)
         self.problem.after_solve()
-        return self.energy_value() if energy else math.nan
+
+    def _energy_at(self, step: float) -> float:
+        """Phi(previous - step du), leaving u there."""
+        self._move(step)
+        return self.energy_value()
 
     def timings(self) -> Timings:
         return self.linear.timings + self.newton.timings
