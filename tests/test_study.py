@@ -96,6 +96,23 @@ def test_bad_study_file_names_the_key(shared_tmp, text, key):
     assert error.value.key == key
 
 
+@pytest.mark.parametrize("path", sorted(DEMOS.glob("*.study.toml")), ids=lambda p: p.name)
+def test_demo_study_files_are_valid(path):
+    """Every study file of demos/ loads and every scene of its grid passes validation (nothing solved)."""
+    data, vary, _ = study.load_study(path)
+    base, combinations, scenes = study.study_scenes(data, vary)
+    sizes = [len(text.split("=", 1)[1].split(",")) for text in vary]
+    assert len(scenes) == len(combinations) == math.prod(sizes) >= 4
+    for combination, scene in zip(combinations, scenes, strict=True):
+        settings = dict(o.split("=", 1) for o in combination)
+        if "discretisation.mesh_size" in settings:
+            assert scene.discretisation.mesh_size == float(settings["discretisation.mesh_size"])
+        if "friction.mu" in settings:
+            assert scene.friction.mu == float(settings["friction.mu"])
+    if "newton" in path.name:  # the solve-count studies run Newton with the secant at the Gauss points
+        assert base.solver.method == "newton" and base.discretisation.averaging == "quadrature"
+
+
 def test_cheapest_setting_per_error_level():
     rows = [{"settings": {"a.b": str(i)}, "converged": True, "relative_error": e, "wall_time_s": t,
              "reference_kind": "exact", "x": 1.0, "linear_solves": 1, "dofs": 10}

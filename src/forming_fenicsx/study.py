@@ -22,7 +22,7 @@ from mpi4py import MPI
 from .errors import SceneError
 from .report import markdown_table, richardson
 from .run import solve_scene
-from .scene import apply_overrides, parse_override, read_scene_data, scene_from_dict
+from .scene import Scene, apply_overrides, parse_override, read_scene_data, scene_from_dict
 
 log = logging.getLogger(__name__)
 QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
@@ -115,14 +115,21 @@ def references(rows: list[dict[str, Any]], quantity: str) -> None:
                 else math.nan
 
 
-def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | None = None,
-              comm: MPI.Comm = MPI.COMM_WORLD) -> list[dict[str, Any]]:
-    """Run every combination of the varied values (skipping those already in out/study.json)."""
+def study_scenes(data: dict[str, Any], vary: list[str]) -> tuple[Scene, list[tuple[str, ...]], list[Scene]]:
+    """The unvaried scene, every combination of the varied overrides and its scene, all validated before
+    anything is solved (a SceneError names the first bad key)."""
     grid = parse_vary(vary)
     combinations = list(itertools.product(*[values for _, values in grid]))
     base = scene_from_dict(json.loads(json.dumps(data)))  # validates the unvaried scene first
-    quantity = quantity or QUANTITIES[base.process.kind]
     scenes = [scene_from_dict(apply_overrides(json.loads(json.dumps(data)), list(c))) for c in combinations]
+    return base, combinations, scenes
+
+
+def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | None = None,
+              comm: MPI.Comm = MPI.COMM_WORLD) -> list[dict[str, Any]]:
+    """Run every combination of the varied values (skipping those already in out/study.json)."""
+    base, combinations, scenes = study_scenes(data, vary)
+    quantity = quantity or QUANTITIES[base.process.kind]
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     store = out / "study.json"
@@ -147,8 +154,9 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | 
     references(ordered, quantity)
     if comm.rank == 0:
         store.write_text(json.dumps({"quantity": quantity, "runs": ordered}, indent=1, default=str))
-        _write_csv(out / "study.csv", ordered, quantity, [k for k, _ in grid])
-        _pareto_plot(out / "pareto.png", ordered, quantity, [k for k, _ in grid])
+        keys = [key for key, _ in parse_vary(vary)]
+        _write_csv(out / "study.csv", ordered, quantity, keys)
+        _pareto_plot(out / "pareto.png", ordered, quantity, keys)
         (out / "study.md").write_text(report(ordered, quantity) + "\n")
     return ordered
 
