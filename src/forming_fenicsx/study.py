@@ -154,7 +154,7 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | 
     references(ordered, quantity)
     if comm.rank == 0:
         store.write_text(json.dumps({"quantity": quantity, "runs": ordered}, indent=1, default=str))
-        keys = [key for key, _ in parse_vary(vary)]
+        keys = [override.split("=", 1)[0] for override in combinations[0]]  # the varied keys, in order
         _write_csv(out / "study.csv", ordered, quantity, keys)
         _pareto_plot(out / "pareto.png", ordered, quantity, keys)
         (out / "study.md").write_text(report(ordered, quantity) + "\n")
