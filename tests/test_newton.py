@@ -9,9 +9,11 @@ import pytest
 from mpi4py import MPI
 
 import dolfinx.fem.petsc
+import ufl
 from petsc4py import PETSc
 
-from forming_fenicsx.compat import petsc_vec, set_at_quadrature_points
+from forming_fenicsx import contact
+from forming_fenicsx.compat import function_space, petsc_vec, set_at_quadrature_points
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
@@ -41,6 +43,8 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
     problem.freeze_friction(problem.u)
     set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
     u = petsc_vec(problem.u)
+    u.copy(petsc_vec(newton.forms.previous))  # the contact active set at u alone, as at a first Newton step
+    newton.forms.previous.x.scatter_forward()
     start, residual = u.copy(), newton.assemble_residual().copy()
     newton.assemble_operator()
     direction = u.duplicate()
@@ -59,6 +63,66 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
         remainders.append(difference.norm())
     rates = np.log10(np.array(remainders[:-1]) / np.array(remainders[1:]))
     assert rates.min() > 1.8  # second order: the remainder falls a hundredfold per decade of h
+    newton.destroy()
+
+
+def drawing_newton() -> tuple[FlowProblem, NewtonSolver]:
+    scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING, solver={"method": "newton"})
+    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    return problem, NewtonSolver(problem)
+
+
+def set_velocity(problem: FlowProblem, value) -> None:
+    """u <- value(x, y) at the velocity nodes, e.g. lambda x, y: (0 * x, 0 * y - 1)."""
+    problem.u.interpolate(lambda x: np.vstack(value(x[0], x[1])))
+    problem.u.x.scatter_forward()
+
+
+def test_newton_counts_the_switches_of_the_law_branch_and_the_contact_set():
+    """count_switches: -1 at the first operator; moving from u = 0 (every Gauss point at the rate floor,
+    every die node touching, u_N = 0) to u = (0, -1) (rigid, leaving the die everywhere on the drawing die)
+    switches every die node and no Gauss point; then to an extension (x, -y) (rate 2/sqrt(3) > rate1)
+    every Gauss point, counted here from the mesh's cells."""
+    problem, newton = drawing_newton()
+    comm = problem.comm
+    counts = []
+    for value in (lambda x, y: (0 * x, 0 * y), lambda x, y: (0 * x, 0 * y - 1), lambda x, y: (x, -y)):
+        set_velocity(problem, value)
+        newton.assemble_operator()
+        counts.append(newton.count_switches())
+    node = function_space(problem.mesh, "P", 2)
+    die = dolfinx.fem.locate_dofs_topological(node, 1, problem.role_facets("gamma3_contact"))
+    die_nodes = comm.allreduce(int(np.count_nonzero(die < node.dofmap.index_map.size_local)))
+    cells = comm.allreduce(problem.mesh.topology.index_map(2).size_local)
+    assert die_nodes == 17  # the 8 die facets of the mesh, Q2: 2 * 8 + 1 nodes
+    assert counts == [(-1, -1), (0, die_nodes), (cells * 9, 0)]  # 3 x 3 Gauss points per cell
+    newton.destroy()
+
+
+def test_newton_operator_joins_the_previous_iterates_contact_set():
+    """The operator's contact term takes the active set at u joined with the one at the previous iterate
+    (a die node that left contact in the last step stays stiff one step more): with u leaving the die and
+    the previous iterate touching it everywhere, the operator exceeds the one at u alone by exactly the
+    full penalty (1/d_N) int v_N du_N on the die (constrained rows and columns removed)."""
+    problem, newton = drawing_newton()
+    matrices = []
+    for previous in (lambda x, y: (0 * x, 0 * y - 1), lambda x, y: (0 * x, 0 * y)):
+        set_velocity(problem, previous)
+        petsc_vec(problem.u).copy(petsc_vec(newton.forms.previous))
+        newton.forms.previous.x.scatter_forward()
+        set_velocity(problem, lambda x, y: (0 * x, 0 * y - 1))
+        newton.assemble_operator()
+        matrices.append(newton.newton.A.copy())
+    du, v = ufl.TrialFunction(problem.V), ufl.TestFunction(problem.V)
+    penalty = dolfinx.fem.form(contact.contact_form(du, v, 1.0, problem.n, problem.scene.penalty.d_N,
+                                                    problem.ds_contact))
+    full = dolfinx.fem.petsc.assemble_matrix(penalty, bcs=problem.bcs, diagonal=0.0)
+    full.assemble()
+    scale = matrices[0].norm()
+    matrices[1].axpy(-1.0, matrices[0])
+    matrices[1].axpy(-1.0, full)
+    assert full.norm() > 1.0  # 1/d_N = 100 (the drawing scene) times a facet mass matrix
+    assert matrices[1].norm() < 1e-15 * scale  # the round-off of the operator's own entries (norm 2e7)
     newton.destroy()
 
 
@@ -182,8 +246,8 @@ def test_newton_drawing_with_contact_and_friction(mu):
 
 
 def test_newton_history_and_scene_check(shared_tmp):
-    """history.csv carries the residual norm and the step length of each Newton step; Newton needs the
-    secant at the Gauss points."""
+    """history.csv carries the residual norm, the step length and the switch counts of each Newton step
+    (-1 for the secant start and the first Newton step); Newton needs the secant at the Gauss points."""
     out = shared_tmp / "newton"
     run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0}, solver={"method": "newton"}), out)
     MPI.COMM_WORLD.barrier()
@@ -191,6 +255,9 @@ def test_newton_history_and_scene_check(shared_tmp):
         rows = list(csv.DictReader(stream))
     newton_rows = [r for r in rows if r["residual_norm"] != "nan"]
     assert newton_rows and all(0 < float(r["step_length"]) <= 2 for r in newton_rows)
+    first = len(rows) - len(newton_rows) + 1  # the secant start and the first Newton step
+    assert [r["law_switches"] for r in rows[:first]] == ["-1"] * first
+    assert all(int(r["law_switches"]) >= 0 and int(r["contact_switches"]) >= 0 for r in newton_rows[1:])
     assert float(newton_rows[-1]["relative_increment"]) < 1e-4
     with pytest.raises(SceneError, match="averaging"):
         make_scene(solver={"method": "newton"})

@@ -19,6 +19,7 @@ def contact_pressure(u_state, n, d_N: float):
     return ufl.max_value(normal_velocity(u_state, n), 0.0) / d_N
 
 
-def contact_form(u, v, u_state, n, d_N: float, ds_contact):
-    """Penalty term (1/d_N) int u_N^+ v_N of (3.5), linearised on the active set of ``u_state``."""
-    return active_indicator(u_state, n) / d_N * normal_velocity(u, n) * normal_velocity(v, n) * ds_contact
+def contact_form(u, v, active, n, d_N: float, ds_contact):
+    """Penalty term (1/d_N) int u_N^+ v_N of (3.5), linearised on an active set (an indicator, e.g.
+    active_indicator of the state)."""
+    return active / d_N * normal_velocity(u, n) * normal_velocity(v, n) * ds_contact

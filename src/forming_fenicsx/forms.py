@@ -41,6 +41,7 @@ class NewtonForms:
     tangent_update: dolfinx.fem.Expression
     step: dolfinx.fem.Function
     previous: dolfinx.fem.Function
+    contact_set: dolfinx.fem.Form | None
 
 
 def quadrature_degree(element_degree: int, reduced: bool) -> int:
@@ -241,7 +242,8 @@ class FlowProblem:
         if not self.mixed:
             form += self.volumetric_form(u, v)
         if self.has_contact:
-            form += contact.contact_form(u, v, self.u_state, self.n, self.scene.penalty.d_N, self.ds_contact)
+            form += contact.contact_form(u, v, contact.active_indicator(self.u_state, self.n), self.n,
+                                         self.scene.penalty.d_N, self.ds_contact)
         if self.has_friction:
             form += friction.friction_form(u, v, self.friction_coefficient(), self.n, self.ds_contact)
         return form
@@ -271,7 +273,10 @@ class FlowProblem:
         when tau_h = tau(u), and with |tau_h| <= sigma_p(rate) (the cap) its smallest eigenvalue is alpha
         times the secant's, so the operator is symmetric positive definite with the penalty (Cholesky)
         and every Newton step is a descent direction of Phi. The contact
-        penalty enters with its active set at u (semismooth). The regularised friction enters at a
+        penalty enters with its active set at u (semismooth) joined with the previous iterate's: a die
+        node that left contact in the last step stays stiff one step more (without it, a node at the
+        separation point entered and left contact on alternate steps, and the line search cut each step
+        that pushed it in; docs/solvers.md). The regularised friction enters at a
         fixed bound tau_f (from ``u_friction``, updated every step as in (3.13): the nonlocal averaged
         normal stress is not differentiated) with its tangent where the die point slips faster than
         friction.SLOW_SLIP times the process velocity, and with its secant tau_f/sqrt(|u_T|^2 + d_T^2), the
@@ -319,11 +324,11 @@ class FlowProblem:
         else:
             energy += 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
             operator += self.volumetric_form(du, v)
-        if self.has_contact:  # its second derivative (the active set at u) enters the operator as it is
+        if self.has_contact:  # the active set of its second derivative: at u, joined with the previous iterate's
             penetration = ufl.max_value(contact.normal_velocity(u, self.n), 0.0)
-            term = 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
-            energy += term
-            operator += ufl.derivative(ufl.derivative(term, w, test), w, trial)
+            energy += 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
+            active = ufl.max_value(contact.active_indicator(u, self.n), contact.active_indicator(u_previous, self.n))
+            operator += contact.contact_form(du, v, active, self.n, scene.penalty.d_N, self.ds_contact)
         if self.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
             tau_f, d_T = friction.friction_bound(scene.friction.mu, self.normal_pressure()), scene.friction.d_T
             energy += friction.regularised_functional(tau_f, u, self.n, d_T) * self.ds_contact
@@ -345,11 +350,15 @@ class FlowProblem:
         cap = material.secant_ufl(rate(u)) * rate(u)
         capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
         points = quadrature_points(self.mesh, self.full_degree)
+        contact_set = None
+        if self.has_contact:
+            node = ufl.TestFunction(function_space(self.mesh, "P", scene.discretisation.degree))
+            contact_set = dolfinx.fem.form(contact.active_indicator(u, self.n) * node * self.ds_contact)
         return NewtonForms(split_form(energy, self._apart_degree), split_form(residual, self._apart_degree),
                            dolfinx.fem.form(operator), operator,
                            dual, dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
                            tangent, dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)), points),
-                           step, previous)
+                           step, previous, contact_set)
 
     # -- boundary conditions ------------------------------------------------------------------
     def boundary_dofs(self, role: str, component: int, space=None) -> np.ndarray:

@@ -8,15 +8,19 @@ solution and ``solver.secant_start`` direct secant iterates (the dual stress the
 backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
 derivative), or lengthened while Phi keeps falling when a full step would not yet meet delta. It stops
 with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (on the step taken when that was
-longer) after a step taken in full, and the force balance if solver.force_tolerance is set.
+longer) after a step taken in full, and the force balance if solver.force_tolerance is set. The
+history counts the semismooth switches of each step (flow-law branch at the Gauss points, contact set
+at the die nodes), which keep the convergence from being quadratic on fine meshes.
 """
 from __future__ import annotations
 
 import math
 import time
 
+import numpy as np
 import dolfinx.fem
 import dolfinx.fem.petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from .compat import petsc_vec, set_at_quadrature_points
@@ -50,10 +54,16 @@ class NewtonSolver(SecantSolver):
                                    matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
         self._velocity = problem.u.copy()  # the velocity before the current step
         self._change = petsc_vec(problem.u).duplicate()
+        self._contact_set = None if self.forms.contact_set is None else \
+            dolfinx.fem.petsc.create_vector(self.forms.contact_set)
+        self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
+        self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
 
     def destroy(self) -> None:
         self.newton.destroy()
         self._change.destroy()
+        if self._contact_set is not None:
+            self._contact_set.destroy()
         super().destroy()
 
     def energy_value(self) -> float:
@@ -85,6 +95,30 @@ class NewtonSolver(SecantSolver):
         self.newton.timings.assembly += time.perf_counter() - start
         self.newton.assemble_matrix()
 
+    def count_switches(self) -> tuple[int, int]:
+        """Gauss points whose branch of the flow-stress law (G' = 0 or not, from the operator's coefficients)
+        and die nodes whose contact state changed since the last call, summed over the ranks (-1 on the
+        first call of a solve, and for contact in a scene without it): the semismooth part of the Newton
+        operator."""
+        start = time.perf_counter()
+        tangent = self.forms.tangent
+        owned = tangent.function_space.dofmap.index_map.size_local
+        branches = tangent.x.array.reshape(-1, 2)[:owned, 1] == 0.0
+        active = None
+        if self._contact_set is not None:
+            with self._contact_set.localForm() as local:
+                local.set(0.0)
+            dolfinx.fem.petsc.assemble_vector(self._contact_set, self.forms.contact_set)
+            self._contact_set.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            active = self._contact_set.array > 0.0
+        changed = [-1 if self._branches is None else np.count_nonzero(branches != self._branches),
+                   -1 if self._active is None or active is None else np.count_nonzero(active != self._active)]
+        self._branches, self._active = branches, active
+        counts = self.problem.comm.allreduce(np.array(changed), op=MPI.SUM)  # -1 on every rank, or >= 0
+        self.newton.timings.assembly += time.perf_counter() - start
+        law, contact = (int(count) if count >= 0 else -1 for count in counts)
+        return law, contact
+
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
         """Solve J du = F at u, then u <- u - s du with s from the line search (_line_search). Returns the
         relative change ||du||/||u|| of the full step, or of the step taken when longer (NaN after a failed
@@ -95,6 +129,7 @@ class NewtonSolver(SecantSolver):
         problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
         residual = self.assemble_residual().norm()
         self.assemble_operator()
+        law_switches, contact_switches = self.count_switches()
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
@@ -116,11 +151,12 @@ class NewtonSolver(SecantSolver):
             self._move(0.0)
         else:
             set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
-        record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step)
+        record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step,
+                                 law_switches, contact_switches)
         result.history.append(record)
         if problem.comm.rank == 0:
-            log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  (%.1f s)", inner, increment,
-                     residual, step, record.elapsed)
+            log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, contact %d  "
+                     "(%.1f s)", inner, increment, residual, step, law_switches, contact_switches, record.elapsed)
         return increment
 
     def _relative_change(self) -> float:
@@ -188,6 +224,9 @@ class NewtonSolver(SecantSolver):
                 return result
         set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
         self.forms.dual.x.array[:] *= settings.dual_start
+        petsc_vec(problem.solution).copy(petsc_vec(self.forms.previous))  # the first operator's previous iterate
+        self.forms.previous.x.scatter_forward()
+        self._branches = self._active = None  # count_switches starts afresh
         increments = []
         for inner in range(1, settings.max_iterations + 1):
             increment = self._newton_step(result, inner, start)

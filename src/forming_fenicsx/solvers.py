@@ -165,7 +165,10 @@ class IterationRecord:
     """One linear solve: outer index m, inner index n, relative increment, elapsed seconds, the
     estimated relative error of the linear solve itself (LinearSolver.error_estimate; NaN on the solves
     that are not sampled, see SecantSolver.sampled_error), and for Newton steps the norm of the residual
-    F(u) the step was computed from (at its start) and the line-search step length."""
+    F(u) the step was computed from (at its start), the line-search step length, and how many Gauss points
+    changed the branch of the flow-stress law (constant secant or not, G' = 0 or not) and how many die
+    nodes changed the contact active set since the previous Newton operator (-1: none before, or no
+    contact): the semismooth switches that keep Newton's convergence from being quadratic."""
 
     outer: int
     inner: int
@@ -174,6 +177,8 @@ class IterationRecord:
     solve_error: float = math.nan
     residual: float = math.nan
     step: float = 1.0
+    law_switches: int = -1
+    contact_switches: int = -1
 
 
 @dataclass
