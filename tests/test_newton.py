@@ -43,8 +43,7 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
     problem.freeze_friction(problem.u)
     set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
     u = petsc_vec(problem.u)
-    u.copy(petsc_vec(newton.forms.previous))  # the contact active set at u alone, as at a first Newton step
-    newton.forms.previous.x.scatter_forward()
+    newton.keep_previous()  # the contact active set at u alone, as at a first Newton step
     start, residual = u.copy(), newton.assemble_residual().copy()
     newton.assemble_operator()
     direction = u.duplicate()
@@ -108,8 +107,7 @@ def test_newton_operator_joins_the_previous_iterates_contact_set():
     matrices = []
     for previous in (lambda x, y: (0 * x, 0 * y - 1), lambda x, y: (0 * x, 0 * y)):
         set_velocity(problem, previous)
-        petsc_vec(problem.u).copy(petsc_vec(newton.forms.previous))
-        newton.forms.previous.x.scatter_forward()
+        newton.keep_previous()
         set_velocity(problem, lambda x, y: (0 * x, 0 * y - 1))
         newton.assemble_operator()
         matrices.append(newton.newton.A.copy())

@@ -125,7 +125,7 @@ class NewtonSolver(SecantSolver):
         solve)."""
         forms = self.forms
         problem, u = self.problem, petsc_vec(self.problem.solution)
-        du, previous = petsc_vec(forms.step), petsc_vec(forms.previous)  # the dual update reads both
+        du = petsc_vec(forms.step)  # the dual update reads it and the previous iterate
         problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
         residual = self.assemble_residual().norm()
         self.assemble_operator()
@@ -142,8 +142,7 @@ class NewtonSolver(SecantSolver):
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms.step.x.scatter_forward()
-        u.copy(previous)
-        forms.previous.x.scatter_forward()
+        self.keep_previous()
         petsc_vec(problem.u).copy(petsc_vec(self._velocity))
         step = self._line_search(energy0, slope)
         increment = self._relative_change() / min(step, 1.0)  # (4.4): the full step, or the longer one taken
@@ -158,6 +157,12 @@ class NewtonSolver(SecantSolver):
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, contact %d  "
                      "(%.1f s)", inner, increment, residual, step, law_switches, contact_switches, record.elapsed)
         return increment
+
+    def keep_previous(self) -> None:
+        """The current iterate becomes the previous one (forms.previous, ghosts too): the line search moves
+        from it, the dual update and the operator's joined contact set read it."""
+        petsc_vec(self.problem.solution).copy(petsc_vec(self.forms.previous))
+        self.forms.previous.x.scatter_forward()
 
     def _relative_change(self) -> float:
         """||u - u_before|| / ||u|| of the velocity over the current Newton step."""
@@ -224,8 +229,7 @@ class NewtonSolver(SecantSolver):
                 return result
         set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
         self.forms.dual.x.array[:] *= settings.dual_start
-        petsc_vec(problem.solution).copy(petsc_vec(self.forms.previous))  # the first operator's previous iterate
-        self.forms.previous.x.scatter_forward()
+        self.keep_previous()  # the first operator's previous iterate: its contact set is u's
         self._branches = self._active = None  # count_switches starts afresh
         increments = []
         for inner in range(1, settings.max_iterations + 1):
