@@ -17,7 +17,7 @@ from forming_fenicsx.compat import function_space, petsc_vec, set_at_quadrature_
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import NewtonSolver, parabola_step
+from forming_fenicsx.newton import BRACKET, NewtonSolver, next_trial, parabola_step, parabola_vertex
 from forming_fenicsx.run import run_scene, solve_scene
 from forming_fenicsx.scene import load_scene
 from forming_fenicsx.solvers import SecantSolver
@@ -187,6 +187,60 @@ def test_parabola_step_is_the_minimiser_between_one_and_two():
     assert parabola_step(*values(lambda s: -(s - 1.3) ** 2)) is None       # concave: no minimiser
     assert parabola_step(*values(lambda s: (s - 2.5) ** 2)) is None        # beyond 2: s = 2 is tried anyway
     assert parabola_step(*values(lambda s: (s - 0.6) ** 2)) is None        # below 1: the full step stays
+
+
+def minimise(phi, energies: dict[float, float]) -> tuple[float, int]:
+    """Evaluate phi where next_trial says until it says stop: the lowest length and the evaluations."""
+    evaluations = 0
+    while (trial := next_trial(energies)) is not None:
+        energies[trial] = phi(trial)
+        evaluations += 1
+        assert evaluations < 50
+    return min(energies, key=energies.get), evaluations
+
+
+@pytest.mark.parametrize("minimum", [0.03, 0.07, 0.1, 0.118])
+def test_next_trial_brackets_the_minimum_of_a_kinked_convex_profile(minimum):
+    """Phi along a cut Newton step: a steep linear fall, then a steeper rise (|rate|-like, the flow stress
+    of (4.5)) with a little curvature. From the halving's points (0, 1/16, 1/8, 1) the trials end within
+    BRACKET of the minimum in a few evaluations."""
+    def phi(s):
+        return -5.0 * s + 60.0 * abs(s - minimum) + 3.0 * s**2
+    energies = {s: phi(s) for s in (0.0, 0.0625, 0.125, 1.0)}
+    found, evaluations = minimise(phi, energies)
+    assert abs(found - minimum) < BRACKET * minimum
+    assert evaluations <= 10
+
+
+def test_next_trial_stops_without_a_bracket_and_parabola_vertex():
+    """No trial when the lowest point is an end of the lengths tried; the vertex of a parabola is exact."""
+    assert next_trial({0.0: 1.0, 0.5: 0.5, 1.0: 0.2}) is None      # still falling at the longest
+    assert next_trial({0.0: 0.0, 0.5: 0.5, 1.0: 2.0}) is None      # rising from 0
+    assert parabola_vertex(0.1, 2.0 * 0.2**2, 0.4, 2.0 * 0.1**2, 1.0, 2.0 * 0.7**2) == pytest.approx(0.3, rel=1e-12)
+    assert parabola_vertex(0.0, 0.0, 0.5, 1.0, 1.0, 0.0) is None  # concave
+
+
+def test_newton_cut_steps_end_near_the_minimum_of_phi(monkeypatch):
+    """Example 1 at h = 0.25: every step the halving cut (the first Newton steps, at 1/16 to 1/2 of the
+    direction) is moved to within 20 % of the minimum of Phi along the direction: Phi there lies below
+    Phi at 0.8 and 1.2 times it. (The halving alone stopped at 1/16 on the first step where Phi is lowest
+    near 0.035, measured on Example 1 at h = 0.15.)"""
+    checked, refine = [], NewtonSolver._refine
+
+    def refine_and_check(self, energies, current):
+        best = refine(self, energies, current)
+        around = [self._energy_at(factor * best) for factor in (0.8, 1.2)]
+        checked.append((best, self._energy_at(best), *around))  # u back at the step taken
+        return best
+
+    monkeypatch.setattr(NewtonSolver, "_refine", refine_and_check)
+    result, newton = newton_on_demo("discretisation.mesh_size=0.25")
+    assert newton["converged"] and newton["linear_solves"] <= 13
+    assert len(checked) >= 2 and checked[0][0] < 0.1
+    for _, energy, shorter, longer in checked:
+        assert energy <= min(shorter, longer)
+    cut = [record.step for record in result.history if not np.isnan(record.residual) and record.step < 1.0]
+    assert cut == [best for best, *_ in checked]
 
 
 def test_newton_lengthens_full_steps_in_the_slow_tail():

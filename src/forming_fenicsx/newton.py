@@ -6,7 +6,8 @@ as stiff as the secant along the flow direction, so the iteration starts from th
 solution and ``solver.secant_start`` direct secant iterates (the dual stress then starts at
 ``solver.dual_start`` times tau(u)), and every Newton step is damped by a
 backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
-derivative), or lengthened while Phi keeps falling when a full step would not yet meet delta. It stops
+derivative) and then moved towards the minimum of Phi along the direction, or lengthened while Phi
+keeps falling when a full step would not yet meet delta. It stops
 with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (on the step taken when that was
 longer) after a step taken in full, and the force balance if solver.force_tolerance is set. The
 history counts the semismooth switches of each step (flow-law branch at the Gauss points, contact set
@@ -29,16 +30,45 @@ from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, T
 
 ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
 MAX_HALVINGS = 12   # smallest step 2**-12
+REFINEMENTS = 6     # energy evaluations that move a cut step towards the minimum of Phi along the direction
+BRACKET = 0.1       # ... until the bracket around it is this small relative to the step
+GOLDEN = 0.381966   # (3 - sqrt(5))/2: golden-section fraction
+
+
+def parabola_vertex(a: float, fa: float, b: float, fb: float, c: float, fc: float) -> float | None:
+    """The minimiser of the parabola through (a, fa), (b, fb), (c, fc), a < b < c; None when it is not
+    convex."""
+    left, right = (b - a) * (fb - fc), (b - c) * (fb - fa)
+    if not right - left > 0:  # (b - a)(c - b)(c - a) times the leading coefficient
+        return None
+    return b - 0.5 * ((b - a) * left - (b - c) * right) / (left - right)
 
 
 def parabola_step(energy0: float, energy1: float, energy2: float) -> float | None:
     """The minimiser, strictly between 1 and 2, of the parabola through Phi(0), Phi(1) and Phi(2) along a
     Newton direction; None when the parabola is not convex or its minimiser lies outside (1, 2)."""
-    curvature = energy2 - 2.0 * energy1 + energy0  # twice the parabola's leading coefficient
-    if not curvature > 0:
+    fitted = parabola_vertex(0.0, energy0, 1.0, energy1, 2.0, energy2)
+    return fitted if fitted is not None and 1.0 < fitted < 2.0 else None
+
+
+def next_trial(energies: dict[float, float]) -> float | None:
+    """The next step length at which to evaluate Phi when minimising it along a Newton direction (Phi is
+    convex there), from the lengths tried so far and their energies: the vertex of the parabola through
+    the lowest point and its neighbours, or a golden-section point of the wider side when the vertex lies
+    near the ends or the lowest point (Brent's safeguard). None when the lowest point has no neighbour on
+    one side (no bracket) or the bracket is within BRACKET of its size."""
+    lengths = sorted(energies)
+    lowest = min(range(len(lengths)), key=lambda k: energies[lengths[k]])
+    if lowest in (0, len(lengths) - 1):
         return None
-    fitted = 0.5 + (energy0 - energy1) / curvature
-    return fitted if 1.0 < fitted < 2.0 else None
+    a, b, c = lengths[lowest - 1:lowest + 2]
+    if c - a < BRACKET * b:
+        return None
+    vertex = parabola_vertex(a, energies[a], b, energies[b], c, energies[c])
+    if vertex is not None and a + BRACKET * (b - a) < vertex < c - BRACKET * (c - b) \
+            and abs(vertex - b) > 0.5 * BRACKET * (c - a):
+        return vertex
+    return b + GOLDEN * (c - b) if c - b > b - a else b - GOLDEN * (b - a)
 
 
 class NewtonSolver(SecantSolver):
@@ -173,19 +203,25 @@ class NewtonSolver(SecantSolver):
         return change.norm() / norm if norm > 0 else math.inf
 
     def _line_search(self, energy0: float, slope: float) -> float:
-        """Move u to previous - s du and return s: the largest s = 2^-j that lowers Phi by at least
-        ARMIJO * s * F.du; a full step that does not yet meet delta is lengthened to the best of s = 1,
-        s = 2 and the minimiser of the parabola through Phi at s = 0, 1, 2 (parabola_step). Near the answer
-        the minimum of Phi along -du often lies beyond the full step: while the dual stress differs from
-        tau(u), the operator is stiffer than the consistent tangent along the flow direction
-        (docs/solvers.md)."""
+        """Move u to previous - s du and return s. A full step that lowers Phi by at least
+        ARMIJO * F.du is taken, or, when it does not yet meet delta, lengthened to the best of s = 1, s = 2
+        and the minimiser of the parabola through Phi at s = 0, 1, 2 (parabola_step): near the answer the
+        minimum of Phi along -du often lies beyond the full step, since while the dual stress differs
+        from tau(u) the operator is stiffer than the consistent tangent along the flow direction
+        (docs/solvers.md). Otherwise the step is halved until it lowers Phi by ARMIJO * s * F.du and
+        then moved towards the minimum of Phi along -du (_refine)."""
         step, energy = 1.0, self._energy_at(1.0)
+        energies = {0.0: energy0, step: energy}
         for _ in range(MAX_HALVINGS):
             if energy <= energy0 - ARMIJO * step * slope:
                 break
             step *= 0.5
-            energy = self._energy_at(step)
-        if step < 1.0 or self._relative_change() < self.settings.tolerance:
+            energy = energies[step] = self._energy_at(step)
+        else:
+            return step  # no sufficient decrease down to 2**-12: the stall checks end such runs
+        if step < 1.0:
+            return self._refine(energies, step)
+        if self._relative_change() < self.settings.tolerance:
             return step
         tried = [(energy, 1.0), (self._energy_at(2.0), 2.0)]
         fitted = parabola_step(energy0, energy, tried[1][0])
@@ -193,6 +229,24 @@ class NewtonSolver(SecantSolver):
             tried.append((self._energy_at(fitted), fitted))
         best = min(tried)[1]
         if best != tried[-1][1]:
+            self._move(best)
+        return best
+
+    def _refine(self, energies: dict[float, float], current: float) -> float:
+        """From u at step length ``current``, move u to the lowest of up to REFINEMENTS more points chosen by
+        next_trial within the bracket of the lengths tried (below the shortest step the halving rejected)
+        and return its length. Where a step is cut, Phi along the direction falls nearly linearly up to a
+        steep rise (the flow stress of (4.5) is nearly constant above rate1, so Phi grows like |rate|
+        where the step reverses the flow), and the halving alone lands anywhere within a factor 2 of
+        that minimum."""
+        for _ in range(REFINEMENTS):
+            trial = next_trial(energies)
+            if trial is None:
+                break
+            energies[trial] = self._energy_at(trial)
+            current = trial
+        best = min(energies, key=energies.get)
+        if best != current:
             self._move(best)
         return best
 
