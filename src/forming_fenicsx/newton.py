@@ -220,32 +220,36 @@ class NewtonSolver(SecantSolver):
         else:
             return step  # no sufficient decrease down to 2**-12: the stall checks end such runs
         if step < 1.0:
-            return self._refine(energies, step)
+            return self._lowest(energies, self._refine(energies, step))
         if self._relative_change() < self.settings.tolerance:
             return step
-        tried = [(energy, 1.0), (self._energy_at(2.0), 2.0)]
-        fitted = parabola_step(energy0, energy, tried[1][0])
+        step = 2.0
+        energies[step] = self._energy_at(step)
+        fitted = parabola_step(energy0, energy, energies[step])
         if fitted is not None:
-            tried.append((self._energy_at(fitted), fitted))
-        best = min(tried)[1]
-        if best != tried[-1][1]:
-            self._move(best)
-        return best
+            step = fitted
+            energies[step] = self._energy_at(step)
+        return self._lowest(energies, step)
 
     def _refine(self, energies: dict[float, float], current: float) -> float:
-        """From u at step length ``current``, move u to the lowest of up to REFINEMENTS more points chosen by
-        next_trial within the bracket of the lengths tried (below the shortest step the halving rejected)
-        and return its length. Where a step is cut, Phi along the direction falls nearly linearly up to a
-        steep rise (the flow stress of (4.5) is nearly constant above rate1, so Phi grows like |rate|
-        where the step reverses the flow), and the halving alone lands anywhere within a factor 2 of
-        that minimum."""
+        """Evaluate Phi at up to REFINEMENTS more step lengths chosen by next_trial within the bracket of
+        the lengths tried (below the shortest step the halving rejected), adding them to ``energies``;
+        returns the length u is left at (``current`` when none was tried). Where a step is cut, Phi along
+        the direction falls nearly linearly up to a steep rise (the flow stress of (4.5) is nearly
+        constant above rate1, so Phi grows like |rate| where the step reverses the flow), and the halving
+        alone lands anywhere within a factor 2 of that minimum."""
         for _ in range(REFINEMENTS):
             trial = next_trial(energies)
             if trial is None:
                 break
             energies[trial] = self._energy_at(trial)
             current = trial
-        best = min(energies, key=energies.get)
+        return current
+
+    def _lowest(self, energies: dict[float, float], current: float) -> float:
+        """Move u from step length ``current`` to the nonzero length of lowest Phi among ``energies`` (the
+        lengths the line search evaluated) and return it."""
+        best = min((length for length in energies if length > 0.0), key=energies.get)
         if best != current:
             self._move(best)
         return best
