@@ -9,7 +9,8 @@ import ufl
 from mpi4py import MPI
 
 from forming_fenicsx.compat import cell_geometry_nodes, original_cell_index
-from forming_fenicsx.geometry import ROLES, build_mesh, graded_edge, write_msh
+from forming_fenicsx.geometry import build_mesh, graded_edge, write_msh
+from forming_fenicsx.roles import ROLES
 
 from conftest import make_scene
 

@@ -80,8 +80,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _not_a_compiler_line(record: logging.LogRecord) -> bool:
+    """False for the C compiler's build lines: when FFCx compiles a form, setuptools logs every compile
+    and link command through the root logger, whose handler FFCx installed (about 30 lines a run)."""
+    return not ("distutils" in record.pathname or "setuptools" in record.pathname)
+
+
 def configure_logging(quiet: bool, rank: int) -> None:
-    """The application's own handler, on rank 0 only; the root logger is left alone."""
+    """The application's own handler, on rank 0 only; the root logger's level is left alone, and its
+    handlers drop the compiler's build lines (_not_a_compiler_line)."""
+    for handler in logging.getLogger().handlers:
+        if _not_a_compiler_line not in handler.filters:
+            handler.addFilter(_not_a_compiler_line)
     log.propagate = False
     if rank == 0:
         handler = logging.StreamHandler(sys.stdout)

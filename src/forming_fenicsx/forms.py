@@ -15,8 +15,10 @@ import ufl
 from petsc4py import PETSc
 
 from . import contact, friction
+from .boundary_filter import BoundaryFilter
 from .compat import function_space, mixed_space, petsc_vec, quadrature_points, quadrature_space
-from .geometry import ROLES, FormingMesh
+from .geometry import FormingMesh
+from .roles import ROLES
 from .kinematics import deviatoric, deviatoric_product, equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 from .scene import Scene
@@ -156,12 +158,15 @@ class FlowProblem:
         self.has_contact = "gamma3_contact" in self.roles
         self.has_friction = self.has_contact and scene.friction.mu > 0
         self.has_force = "gamma5_force" in self.roles and scene.process.applied_force is not None
+        self.multiplier = None  # the augmented contact's lambda (contact.py), or none: the pure penalty
+        if self.has_contact and scene.penalty.augmented:
+            self.multiplier = contact.ContactMultiplier(self.u, self.n, scene.penalty.d_N, self.ds_contact,
+                                                        self.full_degree)
         self.normal_stress_average = None
         if self.has_friction and scene.friction.normal_stress == "averaged":
-            pressure = contact.contact_pressure(self.u_friction, self.n, scene.penalty.d_N)
-            self.normal_stress_average = friction.AveragedNormalStress(
-                pressure, mesh, self.facet_tags, ROLES["gamma3_contact"], scene.mollification_length,
-                scene.solver.petsc_options)
+            self.normal_stress_average = BoundaryFilter(
+                self.friction_normal_stress(), mesh, self.facet_tags, ROLES["gamma3_contact"],
+                scene.mollification_length, scene.solver.petsc_options, "averaged_normal_stress")
         self.bcs = self._boundary_conditions()
 
         if self.mixed:
@@ -172,7 +177,8 @@ class FlowProblem:
             du, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
             self.a_ufl = self._bilinear(du, v)
         self.a = dolfinx.fem.form(self.a_ufl)
-        self.L = dolfinx.fem.form(self._load(v)) if self.has_force else None
+        load = self._linear(v)
+        self.L = dolfinx.fem.form(load) if load is not None else None
         zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
         self.system_vector = self.L or dolfinx.fem.form(ufl.inner(zero, v) * self.dx)
         # the residual of the velocity equations at u (its values on constrained dofs are reactions)
@@ -180,8 +186,9 @@ class FlowProblem:
         residual = ufl.action(self._bilinear(ufl.TrialFunction(self.V), v), self.u)
         if self.mixed:
             residual -= self.pressure * ufl.div(v) * self.dx
-        if self.has_force:
-            residual -= self._load(v)
+        load = self._linear(v)
+        if load is not None:
+            residual -= load
         self.residual = split_form(residual, self._apart_degree)
 
     # -- terms of b(w; u, v) and f(v) ---------------------------------------------------------
@@ -225,11 +232,31 @@ class FlowProblem:
     def ds_contact(self):
         return self.ds(ROLES["gamma3_contact"])
 
+    def contact_pressure(self, u):
+        """-sigma_N >= 0 on Gamma3 at the velocity u: (lambda + u_N/d_N)^+ (contact.py)."""
+        return contact.contact_pressure(u, self.n, self.scene.penalty.d_N, self.multiplier_value)
+
+    def contact_active(self, u):
+        """The active set of the contact at the velocity u (an indicator)."""
+        return contact.active_indicator(u, self.n, self.scene.penalty.d_N, self.multiplier_value)
+
+    @property
+    def multiplier_value(self):
+        """lambda of the augmented contact (0 for the pure penalty)."""
+        return self.multiplier.value if self.multiplier is not None else 0.0
+
+    def friction_normal_stress(self):
+        """The local normal pressure of the friction bound: the multiplier lambda of the augmented contact
+        (the pressure it has converged to, updated with it), else u_N^+/d_N of (3.4) at ``u_friction``."""
+        if self.multiplier is not None:
+            return self.multiplier.value
+        return self.contact_pressure(self.u_friction)
+
     def normal_pressure(self):
-        """The sigma_N-bar >= 0 of tau_f: averaged (mollified) or local (3.4), from ``u_friction``."""
+        """The sigma_N-bar >= 0 of tau_f: averaged (mollified) or local, frozen by freeze_friction."""
         if self.normal_stress_average is not None:
             return ufl.max_value(self.normal_stress_average.value, 0.0)
-        return contact.contact_pressure(self.u_friction, self.n, self.scene.penalty.d_N)
+        return self.friction_normal_stress()
 
     def friction_coefficient(self):
         """Slip coefficient tau_f(u_friction)/sqrt(|u_state,T|^2 + d_T^2) of the regularised friction."""
@@ -242,10 +269,20 @@ class FlowProblem:
         if not self.mixed:
             form += self.volumetric_form(u, v)
         if self.has_contact:
-            form += contact.contact_form(u, v, contact.active_indicator(self.u_state, self.n), self.n,
-                                         self.scene.penalty.d_N, self.ds_contact)
+            form += contact.contact_form(u, v, self.contact_active(self.u_state), self.n, self.scene.penalty.d_N,
+                                         self.ds_contact)
         if self.has_friction:
             form += friction.friction_form(u, v, self.friction_coefficient(), self.n, self.ds_contact)
+        return form
+
+    def _linear(self, v):
+        """The right-hand side of the secant systems: f(v) = int_G5 F_N v_N of (3.2), minus the augmented
+        contact's int lambda v_N over the state's active set; None when the scene has neither."""
+        form = self._load(v) if self.has_force else None
+        if self.multiplier is not None:
+            pressure = contact.multiplier_form(v, self.contact_active(self.u_state), self.multiplier.value, self.n,
+                                               self.ds_contact)
+            form = -pressure if form is None else form - pressure
         return form
 
     def _load(self, v):
@@ -325,9 +362,8 @@ class FlowProblem:
             energy += 0.5 / scene.penalty.d * ufl.div(u) ** 2 * self.dx_vol
             operator += self.volumetric_form(du, v)
         if self.has_contact:  # the active set of its second derivative: at u, joined with the previous iterate's
-            penetration = ufl.max_value(contact.normal_velocity(u, self.n), 0.0)
-            energy += 0.5 / scene.penalty.d_N * penetration**2 * self.ds_contact
-            active = ufl.max_value(contact.active_indicator(u, self.n), contact.active_indicator(u_previous, self.n))
+            energy += contact.contact_energy(u, self.n, scene.penalty.d_N, self.multiplier_value, self.ds_contact)
+            active = ufl.max_value(self.contact_active(u), self.contact_active(u_previous))
             operator += contact.contact_form(du, v, active, self.n, scene.penalty.d_N, self.ds_contact)
         if self.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
             tau_f, d_T = friction.friction_bound(scene.friction.mu, self.normal_pressure()), scene.friction.d_T
@@ -353,7 +389,7 @@ class FlowProblem:
         contact_set = None
         if self.has_contact:
             node = ufl.TestFunction(function_space(self.mesh, "P", scene.discretisation.degree))
-            contact_set = dolfinx.fem.form(contact.active_indicator(u, self.n) * node * self.ds_contact)
+            contact_set = dolfinx.fem.form(self.contact_active(u) * node * self.ds_contact)
         return NewtonForms(split_form(energy, self._apart_degree), split_form(residual, self._apart_degree),
                            dolfinx.fem.form(operator), operator,
                            dual, dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
@@ -399,6 +435,11 @@ class FlowProblem:
             self._uniform.value = 0.0
         if friction_too:
             self.freeze_friction(u)
+
+    def contact_settled(self, increment: float) -> bool:
+        """After an iterate taken in full: the augmented contact's multiplier update (ContactMultiplier.settled);
+        True when there is none or it has settled."""
+        return self.multiplier is None or self.multiplier.settled(increment, self.scene.solver.tolerance)
 
     def freeze_friction(self, u: dolfinx.fem.Function) -> None:
         """tau_f from u: u_{0,m} of the modified method (3.33), u_n of the direct method (3.13)."""

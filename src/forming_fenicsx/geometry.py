@@ -1,8 +1,7 @@
 """Gmsh scripts for the half models of Fig. 1, built from structured quadrilateral blocks (Fig. 2).
 
-Boundary roles are physical groups named as in section 2:
-Gamma1 process velocity (2.5), Gamma2/Gamma4 free (2.6), Gamma3 die contact (2.9),
-Gamma5 applied force (2.7), Gamma6 symmetry (2.8).
+Boundary roles are physical groups named as in section 2 (roles.py); a user's .msh file is checked by
+msh.py.
 """
 from __future__ import annotations
 
@@ -17,11 +16,10 @@ import numpy as np
 from mpi4py import MPI
 
 from .errors import SceneError
+from .msh import check_msh, gmsh_session
+from .roles import ROLES, WORKPIECE
 from .scene import Scene
 
-ROLES = {"gamma1_velocity": 1, "gamma2_free": 2, "gamma3_contact": 3,
-         "gamma4_free": 4, "gamma5_force": 5, "gamma6_symmetry": 6}
-WORKPIECE = 1
 
 
 @dataclass(frozen=True)
@@ -181,98 +179,12 @@ def _drawing(scene: Scene) -> None:
 BUILDERS = {"extrusion": _extrusion, "drawing": _drawing}
 
 
-@contextmanager
-def _gmsh_session():
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        yield
-    finally:
-        gmsh.finalize()
-
-
 def _generate(scene: Scene) -> None:
     gmsh.model.add(scene.process.kind)
     BUILDERS[scene.process.kind](scene)
     gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
     gmsh.model.mesh.generate(2)
     gmsh.model.mesh.setOrder(scene.discretisation.degree)
-
-
-QUADRILATERALS = {3: "4-node quadrilateral", 10: "9-node quadrilateral"}  # gmsh element types
-REQUIRED_ROLES = ("gamma1_velocity", "gamma3_contact", "gamma6_symmetry")
-
-
-def _quad_jacobians() -> np.ndarray:
-    """Signed Jacobian determinants of the bilinear map of every quadrilateral of the current gmsh
-    model at its four corners and its centre (gmsh's own are unsigned for 2-D cells)."""
-    tags, points, _ = gmsh.model.mesh.getNodes()
-    position = dict(zip(tags.tolist(), range(len(tags)), strict=True))
-    values = []
-    for element_type in QUADRILATERALS:
-        if element_type not in gmsh.model.mesh.getElementTypes(2):
-            continue
-        nodes = gmsh.model.mesh.getElementsByType(element_type)[1].reshape(-1, 4 if element_type == 3 else 9)
-        x = points.reshape(-1, 3)[[[position[n] for n in quad[:4]] for quad in nodes.tolist()]][:, :, :2]
-        following, preceding = np.roll(x, -1, axis=1) - x, np.roll(x, 1, axis=1) - x
-        corners = following[:, :, 0] * preceding[:, :, 1] - following[:, :, 1] * preceding[:, :, 0]
-        d1, d2 = x[:, 2] - x[:, 0], x[:, 3] - x[:, 1]
-        centre = 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
-        values.append(np.column_stack([corners, centre]).ravel())
-    return np.concatenate(values)
-
-
-def _check_msh(path: str) -> dict[int, int]:
-    """Open a user's .msh in the current gmsh session and check it; returns file tag -> role tag.
-
-    Raises SceneError (key geometry.mesh_file) for a mesh that is not plane 2-D, has cells other than
-    quadrilaterals, misses a required role, names unknown roles, gives one edge two roles, or has
-    inverted or degenerate elements.
-    """
-    def fail(message: str) -> None:
-        raise SceneError("geometry.mesh_file", f"{path}: {message}")
-
-    try:
-        gmsh.open(path)
-    except Exception as error:
-        fail(f"Gmsh cannot read it ({error})")
-    groups = gmsh.model.getPhysicalGroups()
-    if any(dim == 3 for dim, _ in groups) or len(gmsh.model.mesh.getElementTypes(3)):
-        fail("a 3-D mesh; only plane (2-D) meshes are supported")
-    if not any(dim == 2 for dim, _ in groups):
-        fail("no physical group of dimension 2 (the workpiece's cells)")
-    coordinates = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
-    if np.abs(coordinates[:, 2]).max() > 1e-12 * max(np.ptp(coordinates[:, :2], axis=0).max(), 1e-300):
-        fail("not plane: nodes with z != 0")
-    other = [gmsh.model.mesh.getElementProperties(t)[0] for t in gmsh.model.mesh.getElementTypes(2)
-             if t not in QUADRILATERALS]
-    if other:
-        fail(f"unsupported cells ({', '.join(other)}); use 4- or 9-node quadrilaterals")
-    names = {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in groups if dim == 1}
-    unknown = sorted(name for name in names.values() if name not in ROLES)
-    if unknown:
-        fail(f"unknown boundary role names {unknown}; allowed: {', '.join(ROLES)}")
-    missing = [role for role in REQUIRED_ROLES if role not in names.values()]
-    if missing:
-        fail(f"missing boundary roles {missing} (physical groups of dimension 1 with these names)")
-    owner: dict[tuple[int, int], str] = {}
-    for tag, name in names.items():
-        for entity in gmsh.model.getEntitiesForPhysicalGroup(1, tag):
-            types, _, node_lists = gmsh.model.mesh.getElements(1, entity)
-            for element_type, nodes in zip(types, node_lists, strict=True):
-                per_edge = gmsh.model.mesh.getElementProperties(element_type)[3]
-                for edge in np.asarray(nodes).reshape(-1, per_edge)[:, :2]:
-                    key = tuple(sorted(int(n) for n in edge))
-                    if owner.setdefault(key, name) != name:
-                        fail(f"overlapping roles: an edge belongs to both {owner[key]} and {name}")
-    determinants = _quad_jacobians()
-    largest = np.abs(determinants).max()
-    if determinants.min() * determinants.max() < 0:
-        flipped = int((np.sign(determinants) != np.sign(np.median(determinants))).sum())
-        fail(f"inverted elements: the Jacobian changes sign ({flipped} of the corner and centre points of the cells)")
-    if np.abs(determinants).min() < 1e-10 * largest:
-        fail("degenerate elements: a Jacobian determinant is (nearly) zero")
-    return {tag: ROLES[name] for tag, name in names.items()}
 
 
 @contextmanager
@@ -299,11 +211,11 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     from dolfinx.mesh import meshtags
 
     mesh_file = scene.geometry.mesh_file
-    with _gmsh_session():
+    with gmsh_session():
         outcome: dict[int, int] | SceneError | None = None
         if comm.rank == 0:
             try:
-                outcome = _check_msh(mesh_file) if mesh_file else None
+                outcome = check_msh(mesh_file)[0] if mesh_file else None
                 if not mesh_file:
                     _generate(scene)
             except SceneError as error:
@@ -328,7 +240,7 @@ def write_msh(scene: Scene, path: str | Path) -> Path:
     """Write the scene's mesh as a Gmsh .msh file (format 4.1) for use in other tools."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with _gmsh_session():
+    with gmsh_session():
         _generate(scene)
         gmsh.write(str(path))
     return path

@@ -6,6 +6,7 @@ G(rate) = sigma_p(rate)/rate used by a(w; u, v) of (3.2). Both laws satisfy (2.1
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -13,6 +14,9 @@ import numpy as np
 import ufl
 
 from .errors import SceneError
+from .relative import resolve_pair
+
+RATE_FLOOR_RELATIVE = 1e-6  # the power law's default rate floor, relative to the process strain rate
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,10 @@ class PiecewisePowerLaw:
         if not self.rate2 > self.rate1:
             raise SceneError(f"{section}.rate2",
                              f"must be > material.rate1 ({self.rate1}); got {self.rate2}")
+
+    def resolve(self, process_rate: float) -> PiecewisePowerLaw:
+        """The law with every value absolute: (4.5)'s constants are the material's own."""
+        return self
 
     def flow_stress(self, rate: np.ndarray) -> np.ndarray:
         """sigma_p(rate) of (4.5)."""
@@ -77,13 +85,21 @@ class PowerLaw:
     """Pure power law sigma_p = A*rate**n with a floor rate_floor below which the secant is constant.
 
     Without the floor the secant A*rate**(n-1) is unbounded at rate -> 0 and (2.10) fails; with it,
-    (2.10) holds on every bounded range of rates.
+    (2.10) holds on every bounded range of rates. The floor is a regularisation, not a material
+    constant: absolute, or ``rate_floor_relative`` times the process strain rate (default
+    RATE_FLOOR_RELATIVE).
     """
 
     A: float = math.sqrt(3.0)
     n: float = 0.5
-    rate_floor: float = 1e-6
+    rate_floor: float | None = None
+    rate_floor_relative: float | None = None
     law: str = "power"
+
+    def resolve(self, process_rate: float) -> PowerLaw:
+        """The law with its rate floor absolute (and relative to the process strain rate)."""
+        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
+        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
 
     def check(self, section: str = "material") -> None:
         """Reject parameters that break (2.10)."""
@@ -91,7 +107,7 @@ class PowerLaw:
             raise SceneError(f"{section}.A", f"must be > 0 (a positive flow stress scale); got {self.A}")
         if not 0 < self.n <= 1:
             raise SceneError(f"{section}.n", f"must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); got {self.n}")
-        if not self.rate_floor > 0:
+        if not (self.rate_floor is not None and self.rate_floor > 0):
             raise SceneError(f"{section}.rate_floor",
                              f"must be > 0: it bounds the secant at zero rate (2.10); got {self.rate_floor}")
 

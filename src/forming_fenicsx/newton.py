@@ -297,7 +297,9 @@ class NewtonSolver(SecantSolver):
                 return result
             # a step the line search cut does not end the run: its short full step says little about the
             # distance to the answer when the energy along it is far from the Newton model
-            if increment < settings.tolerance and result.history[-1].step >= 1.0 and self._balanced(result):
+            full = result.history[-1].step >= 1.0
+            settled = full and problem.contact_settled(increment)
+            if increment < settings.tolerance and settled and self._balanced(result):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "

@@ -11,6 +11,7 @@ import numpy as np
 from dolfinx.io import XDMFFile
 
 from .solvers import IterationRecord
+from .units import Units
 
 
 def _json_safe(value: Any) -> Any:
@@ -49,12 +50,13 @@ def write_fields(path: Path, mesh, fields) -> None:
             xdmf.write_function(field)
 
 
-def write_die_profile(path: Path, profile: dict) -> None:
-    """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets it)."""
+def write_die_profile(path: Path, profile: dict, units: Units) -> None:
+    """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets it);
+    headers ``name [unit]`` when the scene names its units."""
     names = list(profile)
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow(names)
+        writer.writerow([units.column(name) for name in names])
         for row in zip(*(profile[name] for name in names), strict=True):
             writer.writerow([f"{value:.8g}" for value in row])
 

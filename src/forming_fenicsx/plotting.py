@@ -9,6 +9,7 @@ from .compat import cell_geometry_nodes
 from .forms import FlowProblem
 from .kinematics import equivalent_strain_rate
 from .postprocess import cell_means
+from .units import Units
 
 QUAD_OUTLINE = [0, 1, 3, 2]  # dolfinx quadrilateral vertices in tensor order -> polygon order
 
@@ -42,6 +43,7 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
     from matplotlib.colors import LogNorm
 
     outlines, rate, ux, uy = data
+    units = problem.scene.units
     centres = outlines.mean(axis=1)
     extent = np.ptp(outlines.reshape(-1, 2), axis=0)
     size = (10, max(2.5, 10 * extent[1] / extent[0] + 1.0))
@@ -54,35 +56,35 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
               scale_units="xy", scale=(np.abs(ux).max() or 1.0) / (0.6 * np.sqrt(extent.prod() / len(centres) * stride)),
               width=0.002)
     ax.set_title(f"{title}: velocity vectors")
-    paths.append(_finish(fig, ax, outlines, directory / "velocity.png"))
+    paths.append(_finish(fig, ax, outlines, directory / "velocity.png", units))
 
     fig, ax = plt.subplots(figsize=size)
     floor = max(rate.max() * 1e-4, 1e-12)
     cells = PolyCollection(outlines, array=np.maximum(rate, floor), cmap="jet",
                            norm=LogNorm(vmin=floor, vmax=max(rate.max(), 2 * floor)), edgecolors="face")
     ax.add_collection(cells)
-    fig.colorbar(cells, ax=ax, label="equivalent strain rate")
+    fig.colorbar(cells, ax=ax, label=units.labelled("equivalent strain rate", "strain_rate"))
     ax.set_title(f"{title}: equivalent strain rate")
-    paths.append(_finish(fig, ax, outlines, directory / "strain_rate.png"))
+    paths.append(_finish(fig, ax, outlines, directory / "strain_rate.png", units))
     return paths
 
 
-def _finish(fig, ax, outlines: np.ndarray, path: Path) -> Path:
+def _finish(fig, ax, outlines: np.ndarray, path: Path, units: Units) -> Path:
     import matplotlib.pyplot as plt
 
     points = outlines.reshape(-1, 2)
     ax.set_xlim(points[:, 0].min(), points[:, 0].max())
     ax.set_ylim(points[:, 1].min(), points[:, 1].max())
     ax.set_aspect("equal")
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
+    ax.set_xlabel(units.labelled("x", "length"))
+    ax.set_ylabel(units.labelled("y", "length"))
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
 
 
-def write_die_plot(profile: dict, path: Path, title: str) -> Path:
+def write_die_plot(profile: dict, path: Path, title: str, units: Units) -> Path:
     """die.png: contact pressure (and averaged normal stress, friction stress) along the die."""
     import matplotlib
 
@@ -95,8 +97,8 @@ def write_die_plot(profile: dict, path: Path, title: str) -> Path:
     for key, label in labels.items():
         if key in profile:
             ax.plot(profile["s"], profile[key], marker=".", label=label)
-    ax.set_xlabel("s, distance along the die from where the workpiece meets it")
-    ax.set_ylabel("stress")
+    ax.set_xlabel(units.labelled("s, distance along the die from where the workpiece meets it", "length"))
+    ax.set_ylabel(units.labelled("stress", "stress"))
     ax.set_title(f"{title}: die stresses")
     ax.grid(True, alpha=0.3)
     ax.legend()

@@ -12,12 +12,14 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import numpy as np
 import ufl
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import contact, friction
 from .compat import function_space, geometry_degree
 from .forms import FlowProblem
-from .geometry import ROLES, die_coordinate
+from .geometry import die_coordinate
+from .roles import ROLES
 from .kinematics import equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 
@@ -44,8 +46,7 @@ def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
     if not problem.has_contact:
         return 0.0, 0.0
     n, ds = problem.n, problem.ds_contact
-    pressure = contact.contact_pressure(problem.u, n, problem.scene.penalty.d_N)
-    normal = _integrate(problem, pressure * n[0] * ds)
+    normal = _integrate(problem, problem.contact_pressure(problem.u) * n[0] * ds)
     if not problem.has_friction:
         return normal, 0.0
     traction = friction.friction_traction(problem.friction_coefficient(), problem.u, n)
@@ -77,16 +78,17 @@ def mean_hydrostatic_pressure(problem: FlowProblem) -> float:
 
 
 def in_contact(problem: FlowProblem):
-    """1 where the workpiece presses on the die (u_N > 0, sigma_N < 0 in (3.4)), else 0."""
-    return ufl.conditional(ufl.gt(contact.normal_velocity(problem.u, problem.n), 0.0), 1.0, 0.0)
+    """1 where the workpiece presses on the die (sigma_N < 0), else 0."""
+    return ufl.conditional(ufl.gt(problem.contact_pressure(problem.u), 0.0), 1.0, 0.0)
 
 
 def die_pressure(problem: FlowProblem):
-    """Contact pressure -sigma_N on Gamma3: the penalty's u_N^+/d_N (3.4), or -n.sigma.n of the stress."""
+    """Contact pressure -sigma_N on Gamma3: the contact's (lambda + u_N/d_N)^+ (contact.py), or -n.sigma.n of
+    the stress."""
     if problem.scene.output.die_pressure == "stress":
         n = problem.n
         return -ufl.dot(n, ufl.dot(problem.stress(), n))
-    return contact.contact_pressure(problem.u, problem.n, problem.scene.penalty.d_N)
+    return problem.contact_pressure(problem.u)
 
 
 def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
@@ -146,8 +148,59 @@ def free_surface_crossing(problem: FlowProblem) -> float:
     surface = ufl.conditional(ufl.gt(abs(problem.n[1]), 0.5), 1.0, 0.0)
     out = sum(_integrate(problem, abs(ufl.dot(problem.u, problem.n)) * surface * problem.ds(ROLES[role]))
               for role in ("gamma2_free", "gamma4_free") if role in problem.roles)
-    through = _integrate(problem, ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma1_velocity"]))
-    return out / abs(through) if through else math.nan
+    through = throughput(problem)
+    return out / through if through else math.nan
+
+
+def throughput(problem: FlowProblem) -> float:
+    """|flux through Gamma1|: the volume formed per unit time (per unit width of the half model)."""
+    return abs(_integrate(problem, ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma1_velocity"])))
+
+
+def die_penetration(problem: FlowProblem) -> float:
+    """Volume flowing into the die (u_N > 0 on Gamma3) over the throughput: the penalty (3.4) lets the
+    workpiece into the die at u_N = d_N sigma_N, which must stay a small fraction of the flow."""
+    if not problem.has_contact:
+        return 0.0
+    inflow = _integrate(problem, ufl.max_value(contact.normal_velocity(problem.u, problem.n), 0.0)
+                        * problem.ds_contact)
+    return inflow / throughput(problem)
+
+
+def die_contact_fraction(problem: FlowProblem) -> float:
+    """The length of Gamma3 in contact (u_N > 0) over the length of Gamma3."""
+    if not problem.has_contact:
+        return math.nan
+    ds = problem.ds_contact
+    return _integrate(problem, in_contact(problem) * ds) / _integrate(problem, 1.0 * ds)
+
+
+def exit_zone_rate_ratio(problem: FlowProblem) -> float:
+    """Mean equivalent strain rate over the last exit thickness of the workpiece (x within one full exit
+    thickness of its downstream end) over its mean over the whole workpiece: near zero when the product
+    leaves the die rigid, of order one when it yields after the die."""
+    x = ufl.SpatialCoordinate(problem.mesh)[0]
+    end = problem.comm.allreduce(problem.mesh.geometry.x[:, 0].max(), op=MPI.MAX)
+    zone = ufl.conditional(ufl.gt(x, end - problem.scene.geometry.exit_thickness), 1.0, 0.0)
+    rate = equivalent_strain_rate(problem.u)
+    mean = _integrate(problem, rate * problem.dx) / _integrate(problem, 1.0 * problem.dx)
+    zone_mean = _integrate(problem, rate * zone * problem.dx) / _integrate(problem, zone * problem.dx)
+    return zone_mean / mean if mean > 0 else math.nan
+
+
+def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:
+    """For the law (4.5): the fractions of the plastic work rate int sigma_p(rate) rate dissipated at rates
+    above rate2 and below rate1, where the law is linear (viscous) instead of nearly rate-independent."""
+    law = problem.scene.material
+    if not hasattr(law, "rate2"):
+        return {}
+    rate = equivalent_strain_rate(problem.u)
+    power = law.secant_ufl(rate) * rate * rate
+    total = _integrate(problem, power * problem.dx)
+    if total <= 0:
+        return {}
+    return {f"dissipation_{name}": _integrate(problem, ufl.conditional(test, power, 0.0) * problem.dx) / total
+            for name, test in (("above_rate2", ufl.gt(rate, law.rate2)), ("below_rate1", ufl.lt(rate, law.rate1)))}
 
 
 def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
@@ -208,6 +261,10 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "relative_divergence": relative_divergence(problem, divergence),
         **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
         "free_surface_crossing": free_surface_crossing(problem),
+        "die_penetration": die_penetration(problem),
+        "die_contact_fraction": die_contact_fraction(problem),
+        "exit_zone_rate_ratio": exit_zone_rate_ratio(problem),
+        **dissipation_outside_window(problem),
     }
 
 

@@ -1,8 +1,9 @@
 """One run, in the order data flows: scene -> mesh -> forms -> solver -> results -> files."""
 from __future__ import annotations
 
+import dataclasses
 import logging
-import math
+import os
 import shutil
 import tempfile
 import time
@@ -18,8 +19,9 @@ from .newton import NewtonSolver
 from .output import load_velocity, save_velocity, write_die_profile, write_fields, write_history, write_summary
 from .plotting import write_die_plot, write_figures
 from .postprocess import die_profile, force_balance, output_fields, scalars
+from .sanity import check_run
 from .scene import Scene
-from .solvers import ILL_CONDITIONED, SecantSolver, SolveResult
+from .solvers import SecantSolver, SolveResult
 
 log = logging.getLogger(__name__)
 
@@ -45,13 +47,12 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     result = solver.solve(initial)
     solver.destroy()
     problem.update_state(problem.u, friction_too=True)
-    summary = {
+    body = {
         "scene": scene.to_dict(),
+        "scales": dataclasses.asdict(scene.scales),
         "dolfinx_version": dolfinx.__version__,
         "mpi_ranks": comm.size,
         "dofs": problem.unknowns,
-        "converged": result.converged,
-        "reason": result.reason,
         "linear_solves": result.linear_solves,
         "outer_iterations": result.outer_iterations,
         "solve_error_estimate": result.solve_error,
@@ -60,11 +61,25 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
         "time_split_s": time_split(comm, setup, result),
     }
-    summary["warnings"] = warnings(summary, scene)
+    return problem, result, summarise(body, result, scene, comm)
+
+
+def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
+    """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
+    converged (a failed check means it did not, whatever the iteration did) and why, the units, then the
+    run's numbers. Warnings and failures are logged on rank 0."""
+    findings = check_run(body, scene)
+    failures = [f.message for f in findings if f.failure]
+    converged = result.converged and not failures
+    reason = f"the iteration converged ({result.reason}), but the answer cannot be right: {failures[0]}" \
+        if result.converged and failures else result.reason
+    summary = {"warnings": [f.message for f in findings if not f.failure], "failed_checks": failures,
+               "converged": converged, "reason": reason, "iteration_converged": result.converged,
+               "units": scene.units.summary(list(body)), **body}
     if comm.rank == 0:
         for text in summary["warnings"]:
-            log.warning(text)
-    return problem, result, summary
+            log.warning("warning: %s", text)
+    return summary
 
 
 def time_split(comm: MPI.Comm, setup: float, result: SolveResult) -> dict[str, float]:
@@ -75,31 +90,6 @@ def time_split(comm: MPI.Comm, setup: float, result: SolveResult) -> dict[str, f
     return {key: comm.allreduce(value, op=MPI.MAX) for key, value in
             (("setup", setup), ("assembly", timings.assembly), ("factorisation", timings.factorisation),
              ("solve", timings.solve), ("rest", rest))}
-
-
-COMPRESSIBLE = 0.1  # ||div u|| / ||e(u)|| above which the penalty solution is reported as compressible
-
-
-def warnings(summary: dict[str, Any], scene: Scene) -> list[str]:
-    """What a converged-looking run must still tell its user: a penalty too weak for incompressibility,
-    linear solves whose estimated error approaches the tolerance, a drawing stress the drawn strip
-    cannot carry."""
-    found = []
-    if scene.discretisation.formulation == "penalty" and summary["relative_divergence"] > COMPRESSIBLE:
-        found.append(f"penalty.d = {scene.penalty.d:g} lets the material compress: ||div u||/||e(u)|| = "
-                     f"{summary['relative_divergence']:.2g} (above {COMPRESSIBLE:g}); the results are those of a "
-                     "compressible material: use a smaller penalty.d (Theorem 3.1: the error falls like O(d))")
-    if summary["solve_error_estimate"] > ILL_CONDITIONED * scene.solver.tolerance:
-        found.append(f"ill-conditioned linear systems: estimated relative error of a solve "
-                     f"{summary['solve_error_estimate']:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; "
-                     "use larger penalty parameters (penalty.d, penalty.d_N, friction.d_T)")
-    if scene.process.kind == "drawing":
-        strength = 2 / math.sqrt(3) * scene.reference_flow_stress
-        if summary["drawing_stress"] > strength:
-            found.append(f"the drawing stress {summary['drawing_stress']:.4g} exceeds the plane-strain yield stress "
-                         f"2k = {strength:.4g} of the drawn strip: it yields after the die, so no steady drawing "
-                         "exists at this reduction and friction (the limit of drawability)")
-    return found
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
@@ -119,6 +109,9 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
     if comm.rank == 0:
         out.parent.mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+        umask = os.umask(0)
+        os.umask(umask)
+        staging.chmod(0o777 & ~umask)  # mkdtemp's 0700, made the user's normal permissions
     staging = Path(comm.bcast(str(staging) if staging else None, root=0))
     try:
         summary = _solve_and_write(scene, staging, petsc_options, comm, title, stop, restart)
@@ -145,9 +138,9 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_figures(problem, out, title or scene.process.kind)
     profile = die_profile(problem)
     if comm.rank == 0:
-        write_die_profile(out / "die.csv", profile)
+        write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:
-            write_die_plot(profile, out / "die.png", title or scene.process.kind)
+            write_die_plot(profile, out / "die.png", title or scene.process.kind, scene.units)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"

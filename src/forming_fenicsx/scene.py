@@ -1,9 +1,15 @@
 """Scenes: the TOML input that says everything about one run, validated before any meshing.
 
 A scene has the sections ``process``, ``geometry``, ``material``, ``friction``, ``penalty``,
-``discretisation``, ``solver`` and ``output``. Every value has a default (the paper's value for the
-process); :func:`load_scene` rejects unknown keys, mistyped or non-physical values with a
-:class:`SceneError` that names the key and what is allowed.
+``discretisation``, ``solver``, ``output`` and ``units``. Every value has a default; :func:`load_scene`
+rejects unknown keys, mistyped, non-finite or non-physical values with a :class:`SceneError` that names
+the key and what is allowed.
+
+Values with units that are not physical data (penalties, regularisations, mesh size, lengths left out)
+default to multiples of the scene's own scales (:class:`Scales`: the process velocity, the entry
+thickness and the flow stress at the process strain rate) and are turned into absolute values when the
+scene is resolved, so that a scene gives the same dimensionless answer in any consistent unit system.
+The paper's absolute values stay available: a scene that gives ``penalty.d`` uses it as it is.
 """
 from __future__ import annotations
 
@@ -15,10 +21,13 @@ import types
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from .errors import SceneError
 from .material import LAWS, FlowLaw, PiecewisePowerLaw
+from .msh import mesh_dimensions
+from .relative import check_positive, set_pair
+from .units import Units
 
 PROCESSES = ("extrusion", "drawing")
 
@@ -47,30 +56,22 @@ class Process:
             raise SceneError("process.drive", f"must be one of push, pull; got {self.drive!r}")
 
 
-def _check_strip(geometry, positive: tuple[str, ...]) -> None:
-    """Lengths finite and > 0, a die that reduces the thickness, an existing .msh file if one is named."""
-    if geometry.mesh_file is not None:
-        path = Path(geometry.mesh_file)
-        if path.suffix != ".msh" or not path.is_file():
-            raise SceneError("geometry.mesh_file", f"must name an existing Gmsh .msh file; got {geometry.mesh_file!r}")
-    for key in positive:
-        value = getattr(geometry, key)
-        if not (math.isfinite(value) and value > 0):
-            raise SceneError(f"geometry.{key}", f"must be a finite number > 0; got {value}")
-    if geometry.exit_thickness >= geometry.entry_thickness:
-        raise SceneError("geometry.exit_thickness",
-                         f"must be < geometry.entry_thickness ({geometry.entry_thickness}): "
-                         f"the die must reduce; got {geometry.exit_thickness}")
-
-
 class _Strip:
     """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares.
 
-    ``mesh_file`` names a Gmsh .msh file to use instead of the built-in geometry; its boundary roles
-    are the physical groups named gamma1_velocity ... gamma6_symmetry (as `forming mesh` writes them).
+    Lengths left out are the paper's example geometry (``PAPER``) scaled by entry_thickness over the
+    paper's (or exit_thickness over the paper's when only that is given). ``mesh_file`` names a Gmsh
+    .msh file to use instead of the built-in geometry: its roles are the physical groups named
+    gamma1_velocity ... gamma6_symmetry (as `forming mesh` writes them), and the thicknesses and length
+    are read from it (scene values that disagree with it are rejected; die data do not apply).
     """
 
-    exit_thickness: float
+    PAPER: ClassVar[dict[str, float]]
+    DIE_KEYS: ClassVar[tuple[str, ...]]
+    LENGTH_KEY: ClassVar[str]  # the key named when the die does not fit in the strip
+    entry_thickness: float | None
+    exit_thickness: float | None
+    length: float | None
     mesh_file: str | None
 
     @property
@@ -78,22 +79,88 @@ class _Strip:
         """Half-thickness of the thinnest section (the half model's exit)."""
         return 0.5 * self.exit_thickness
 
+    def resolve(self) -> None:
+        """Fill in the lengths left out: from the mesh file, or the paper's geometry scaled."""
+        for key in ("entry_thickness", "exit_thickness"):
+            check_positive(f"geometry.{key}", getattr(self, key))
+        if self.mesh_file is not None:
+            self._from_mesh()
+            return
+        paper = self.PAPER
+        if self.entry_thickness is not None:
+            factor = self.entry_thickness / paper["entry_thickness"]
+        elif self.exit_thickness is not None:
+            factor = self.exit_thickness / paper["exit_thickness"]
+        else:
+            factor = 1.0
+        for key, value in paper.items():
+            if getattr(self, key) is None and key != "length":
+                setattr(self, key, value if key == "die_angle" else value * factor)
+        self.check_die()
+        if self.length is None:  # the paper's length after the die, scaled, so that the die always fits
+            self.length = paper["length"] * factor + (self.die_end - self._paper_die_end() * factor)
+
+    def _from_mesh(self) -> None:
+        path = Path(self.mesh_file)
+        if path.suffix != ".msh" or not path.is_file():
+            raise SceneError("geometry.mesh_file", f"must name an existing Gmsh .msh file; got {self.mesh_file!r}")
+        measured = mesh_dimensions(str(path))
+        for key in ("entry_thickness", "exit_thickness", "length"):
+            given, value = getattr(self, key), getattr(measured, key)
+            if given is not None and not math.isclose(given, value, rel_tol=1e-6):
+                raise SceneError(f"geometry.{key}", f"is {given} but the mesh file {self.mesh_file} has {value:.9g}; "
+                                 "leave it out (it is read from the mesh) or correct it")
+            setattr(self, key, value)
+        for key in self.DIE_KEYS:
+            if getattr(self, key) is not None:
+                raise SceneError(f"geometry.{key}", f"does not apply with geometry.mesh_file (the die is the "
+                                 f"mesh's gamma3_contact); leave it out")
+
+    def check_die(self) -> None:
+        """The die's own data (not with a mesh file)."""
+
+    def check(self) -> None:
+        """Lengths finite and > 0, a die that reduces the thickness and ends before the strip does."""
+        for key in ("length", "entry_thickness", "exit_thickness"):
+            check_positive(f"geometry.{key}", getattr(self, key))
+        if self.exit_thickness >= self.entry_thickness:
+            raise SceneError("geometry.exit_thickness",
+                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
+                             f"the die must reduce; got {self.exit_thickness}")
+        if self.mesh_file is None:
+            self.check_die()
+            if self.die_end >= self.length:
+                raise SceneError(self.LENGTH_KEY, f"the die must end before geometry.length ({self.length}); {self._die_text()}")
+
 
 @dataclass
 class ExtrusionGeometry(_Strip):
-    """Plane-strain extrusion through a square die (Example 1); full thicknesses, half model built."""
+    """Plane-strain extrusion through a square die (Example 1); full thicknesses, half model built.
 
-    length: float = 20.0
-    entry_thickness: float = 10.0
-    exit_thickness: float = 5.0
-    die_position: float = 10.0
+    Left out: the paper's 20 long, 10 -> 5 strip with the die face at x = 10, scaled."""
+
+    PAPER: ClassVar[dict[str, float]] = {"length": 20.0, "entry_thickness": 10.0, "exit_thickness": 5.0,
+                                         "die_position": 10.0}
+    DIE_KEYS: ClassVar[tuple[str, ...]] = ("die_position",)
+    LENGTH_KEY: ClassVar[str] = "geometry.die_position"
+    length: float | None = None
+    entry_thickness: float | None = None
+    exit_thickness: float | None = None
+    die_position: float | None = None
     mesh_file: str | None = None
 
-    def check(self) -> None:
-        _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_position"))
-        if self.die_position >= self.length:
-            raise SceneError("geometry.die_position",
-                             f"must be < geometry.length ({self.length}); got {self.die_position}")
+    @property
+    def die_end(self) -> float:
+        return self.die_position
+
+    def _paper_die_end(self) -> float:
+        return self.PAPER["die_position"]
+
+    def check_die(self) -> None:
+        check_positive("geometry.die_position", self.die_position)
+
+    def _die_text(self) -> str:
+        return f"geometry.die_position is {self.die_position}"
 
 
 @dataclass
@@ -101,27 +168,31 @@ class DrawingGeometry(_Strip):
     """Plane-strain strip drawing through a conical die with a land (Example 2); full thicknesses.
 
     The strip meets the die at x = die_entry; the die face falls at the semi-angle die_angle (degrees)
-    to the exit half-thickness, then runs parallel for land_length.
-    """
+    to the exit half-thickness, then runs parallel for land_length. Left out: the paper's 7.8 long,
+    1.625 -> 1.5 strip, a 6 degree die met at x = 3 with a land of 0.15, scaled (the angle is not)."""
 
-    length: float = 7.8
-    entry_thickness: float = 1.625
-    exit_thickness: float = 1.5
-    die_angle: float = 6.0
-    land_length: float = 0.15
-    die_entry: float = 3.0
+    PAPER: ClassVar[dict[str, float]] = {"length": 7.8, "entry_thickness": 1.625, "exit_thickness": 1.5,
+                                         "die_angle": 6.0, "land_length": 0.15, "die_entry": 3.0}
+    DIE_KEYS: ClassVar[tuple[str, ...]] = ("die_angle", "land_length", "die_entry")
+    LENGTH_KEY: ClassVar[str] = "geometry.land_length"
+    length: float | None = None
+    entry_thickness: float | None = None
+    exit_thickness: float | None = None
+    die_angle: float | None = None
+    land_length: float | None = None
+    die_entry: float | None = None
     mesh_file: str | None = None
 
-    def check(self) -> None:
-        _check_strip(self, ("length", "entry_thickness", "exit_thickness", "die_entry"))
-        if not (math.isfinite(self.die_angle) and 0 < self.die_angle < 90):
+    def check_die(self) -> None:
+        check_positive("geometry.die_entry", self.die_entry)
+        if not 0 < self.die_angle < 90:
             raise SceneError("geometry.die_angle", f"must lie in (0, 90) degrees (the semi-angle); got {self.die_angle}")
-        if not (math.isfinite(self.land_length) and self.land_length >= 0):
+        if not self.land_length >= 0:
             raise SceneError("geometry.land_length", f"must be a finite number >= 0; got {self.land_length}")
-        if self.die_exit >= self.length:
-            raise SceneError("geometry.land_length",
-                             f"the die (entry at {self.die_entry}, cone {self.cone_length:.4g} long, land "
-                             f"{self.land_length}) must end before geometry.length ({self.length})")
+
+    def _die_text(self) -> str:
+        return (f"the die (entry at {self.die_entry}, cone {self.cone_length:.4g} long, land {self.land_length}) "
+                f"ends at {self.die_exit:.4g}")
 
     @property
     def cone_length(self) -> float:
@@ -133,62 +204,104 @@ class DrawingGeometry(_Strip):
         """x at the end of the land."""
         return self.die_entry + self.cone_length + self.land_length
 
+    @property
+    def die_end(self) -> float:
+        return self.die_exit
+
+    def _paper_die_end(self) -> float:
+        paper = DrawingGeometry(**{k: v for k, v in self.PAPER.items() if k != "length"})
+        return paper.die_exit
+
 
 NORMAL_STRESSES = ("averaged", "local")
+# Default relative values (docs/penalties.md measures them): d = D_RELATIVE rate0/sigma0,
+# d_N = D_N_RELATIVE U/sigma0, d_T = D_T_RELATIVE U.
+D_RELATIVE = 1e-3
+D_N_RELATIVE = 1e-3
+D_T_RELATIVE = 1e-6
+
+
+@dataclass(frozen=True)
+class Scales:
+    """The scene's own scales: the process velocity U, the length H (entry thickness), the process
+    strain rate rate0 (solver.reference_strain_rate, default U/H) and the flow stress
+    sigma0 = sigma_p(rate0). Relative penalties are multiples of them."""
+
+    velocity: float
+    length: float
+    strain_rate: float
+    flow_stress: float
 
 
 @dataclass
 class Friction:
-    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11).
+    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11): absolute, or ``d_T_relative``
+    times the process velocity (default D_T_RELATIVE).
 
     The bound tau_f = mu * sigma_N-bar uses the averaged (mollified) normal stress over
     ``mollification_length`` (default: the mesh size), or the local penalty stress of (3.4).
     """
 
     mu: float = 0.0
-    d_T: float = 1e-6
+    d_T: float | None = None
+    d_T_relative: float | None = None
     normal_stress: str = "averaged"
     mollification_length: float | None = None
 
+    def resolve(self, scales: Scales) -> None:
+        set_pair("friction", self, "d_T", scales.velocity, D_T_RELATIVE)
+
     def check(self) -> None:
-        if not (math.isfinite(self.mu) and self.mu >= 0):
+        if not self.mu >= 0:
             raise SceneError("friction.mu", f"must be a finite number >= 0; got {self.mu}")
-        if not (math.isfinite(self.d_T) and self.d_T > 0):
-            raise SceneError("friction.d_T", f"must be a finite number > 0; got {self.d_T}")
+        check_positive("friction.d_T", self.d_T)
         if self.normal_stress not in NORMAL_STRESSES:
             raise SceneError("friction.normal_stress",
                              f"must be one of {', '.join(NORMAL_STRESSES)}; got {self.normal_stress!r}")
-        length = self.mollification_length
-        if length is not None and not (math.isfinite(length) and length > 0):
-            raise SceneError("friction.mollification_length", f"must be a finite number > 0; got {length}")
+        check_positive("friction.mollification_length", self.mollification_length)
 
 
 @dataclass
 class Penalty:
-    """Penalty constants of (3.4): volumetric d and contact d_N."""
+    """Penalty constants of (3.4): volumetric d (sigma_H = div u / d) and contact d_N
+    (sigma_N = -u_N^+ / d_N), absolute, or relative to the scene's scales (the default):
+    d = d_relative rate0 / sigma0 (div u / rate0 = d_relative sigma_H / sigma0) and
+    d_N = d_N_relative U / sigma0 (u_N / U = d_N_relative sigma_N / sigma0). ``augmented``: the contact
+    pressure is carried by a multiplier updated after every iterate, so that the workpiece does not
+    enter the die (contact.py); false is the paper's pure penalty."""
 
-    d: float = 1e-3
-    d_N: float = 1e-6
+    d: float | None = None
+    d_N: float | None = None
+    d_relative: float | None = None
+    d_N_relative: float | None = None
+    augmented: bool = True
+
+    def resolve(self, scales: Scales) -> None:
+        set_pair("penalty", self, "d", scales.strain_rate / scales.flow_stress, D_RELATIVE)
+        set_pair("penalty", self, "d_N", scales.velocity / scales.flow_stress, D_N_RELATIVE)
 
     def check(self) -> None:
         for key in ("d", "d_N"):
-            value = getattr(self, key)
-            if not (math.isfinite(value) and value > 0):
-                raise SceneError(f"penalty.{key}", f"must be a finite number > 0; got {value}")
+            check_positive(f"penalty.{key}", getattr(self, key))
 
 
 @dataclass
 class Discretisation:
     """Element, incompressibility (penalty (3.5) with complete or reduced quadrature of the volumetric
     term, or a mixed velocity-pressure formulation: Q2 velocity with discontinuous P1 pressure, the
-    limit d -> 0 of Theorem 3.1), mesh size and grading toward the die corner."""
+    limit d -> 0 of Theorem 3.1), mesh size (absolute, or ``mesh_size_relative`` times the exit
+    half-thickness) and grading toward the die corner."""
 
     element: str = "Q2"
     volumetric_integration: str = "reduced"
-    mesh_size: float = 0.5
+    mesh_size: float | None = None
+    mesh_size_relative: float | None = None
     corner_grading: float = 4.0
     averaging: str = "nodes"
     formulation: str = "penalty"
+
+    def resolve(self, thinnest: float, default_relative: float) -> None:
+        set_pair("discretisation", self, "mesh_size", thinnest, default_relative)
 
     def check(self) -> None:
         choices = {"element": ("Q1", "Q2"), "volumetric_integration": ("reduced", "complete"),
@@ -197,9 +310,8 @@ class Discretisation:
             if getattr(self, key) not in allowed:
                 raise SceneError(f"discretisation.{key}",
                                  f"must be one of {', '.join(allowed)}; got {getattr(self, key)!r}")
-        if not (math.isfinite(self.mesh_size) and self.mesh_size > 0):
-            raise SceneError("discretisation.mesh_size", f"must be a finite number > 0; got {self.mesh_size}")
-        if not (math.isfinite(self.corner_grading) and 1 <= self.corner_grading <= 1e3):
+        check_positive("discretisation.mesh_size", self.mesh_size)
+        if not 1 <= self.corner_grading <= 1e3:
             raise SceneError("discretisation.corner_grading",
                              "must lie in [1, 1000] (ratio of the largest to the smallest element "
                              f"on a graded edge; 1 is uniform); got {self.corner_grading}")
@@ -245,16 +357,14 @@ class Solver:
         if isinstance(start, bool) or not (isinstance(start, (int, float)) and 0 <= start <= 1):
             raise SceneError("solver.dual_start",
                              f"must lie in [0, 1] (a fraction of the stress); got {self.dual_start!r}")
-        if not (math.isfinite(self.tolerance) and 0 < self.tolerance < 1):
+        if not 0 < self.tolerance < 1:
             raise SceneError("solver.tolerance", f"must lie in (0, 1) (delta of (4.4)); got {self.tolerance}")
         for key in ("max_iterations", "max_outer_iterations", "stall_window"):
             if getattr(self, key) < 1:
                 raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
-        if not (math.isfinite(self.force_tolerance) and 0 <= self.force_tolerance < 1):
+        if not 0 <= self.force_tolerance < 1:
             raise SceneError("solver.force_tolerance", f"must lie in [0, 1) (0: off); got {self.force_tolerance}")
-        rate = self.reference_strain_rate
-        if rate is not None and not (math.isfinite(rate) and rate > 0):
-            raise SceneError("solver.reference_strain_rate", f"must be a finite number > 0; got {rate}")
+        check_positive("solver.reference_strain_rate", self.reference_strain_rate)
         for key, value in self.petsc_options.items():
             if not isinstance(value, (str, int, float, bool)):
                 raise SceneError(f"solver.petsc_options.{key}",
@@ -281,28 +391,31 @@ class Output:
         if self.die_pressure not in DIE_PRESSURES:
             raise SceneError("output.die_pressure",
                              f"must be one of {', '.join(DIE_PRESSURES)}; got {self.die_pressure!r}")
-        if not (math.isfinite(self.die_entry_trim) and self.die_entry_trim >= 0):
+        if not self.die_entry_trim >= 0:
             raise SceneError("output.die_entry_trim", f"must be a finite number >= 0; got {self.die_entry_trim}")
 
 
 GEOMETRIES = {"extrusion": ExtrusionGeometry, "drawing": DrawingGeometry}
 
-# The paper's constants for each process (Example 1 and Example 2), over the dataclass defaults.
+# Each process's defaults over the dataclass ones: the paper's process data (Example 1 and Example 2).
+# Example 2's Q1 elements with complete integration lock (docs/example2.md): the drawing default is Q2
+# with reduced integration, as for extrusion; the demo scenes name the paper's.
 PROCESS_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
     "extrusion": {},
     "drawing": {
         "process": {"velocity": 1000.0, "drive": "pull"},
         "material": {"A": 100 * math.sqrt(3.0)},
-        "penalty": {"d": 0.005, "d_N": 0.01},
-        "discretisation": {"element": "Q1", "volumetric_integration": "complete", "mesh_size": 0.05,
-                           "corner_grading": 1.0},
+        "discretisation": {"corner_grading": 1.0},
     },
 }
+# The default mesh size over the exit half-thickness: about 5 elements across it (Example 1's 0.5),
+# 15 for drawing (Example 2's 0.05)
+MESH_SIZE_RELATIVE = {"extrusion": 0.2, "drawing": 1 / 15}
 
 
 @dataclass
 class Scene:
-    """One run, fully specified."""
+    """One run, fully specified (after :meth:`resolve`, every value absolute)."""
 
     process: Process
     geometry: ExtrusionGeometry | DrawingGeometry
@@ -312,6 +425,23 @@ class Scene:
     discretisation: Discretisation
     solver: Solver
     output: Output
+    units: Units = field(default_factory=Units)
+
+    def resolve(self) -> None:
+        """Turn the values left out or given relative into absolute ones, in the order they depend on each
+        other: geometry (from the mesh file or the paper's, scaled), the scales, then penalties, the
+        slip regularisation, the power law's rate floor and the mesh size."""
+        self.geometry.resolve()
+        self.geometry.check()
+        self.material = self.material.resolve(self.reference_strain_rate)
+        self.material.check()
+        scales = self.scales
+        if not (math.isfinite(scales.flow_stress) and scales.flow_stress > 0):
+            raise SceneError("material", f"gives the flow stress {scales.flow_stress} at the process strain rate "
+                             f"{scales.strain_rate:.6g}: it must be a finite number > 0")
+        self.penalty.resolve(scales)
+        self.friction.resolve(scales)
+        self.discretisation.resolve(self.geometry.thinnest, MESH_SIZE_RELATIVE[self.process.kind])
 
     def check(self) -> None:
         """Checks of each section, then of values that are valid alone but not together."""
@@ -345,6 +475,11 @@ class Scene:
         """sigma_p at the reference strain rate: the stress scale of the process."""
         return float(self.material.flow_stress([self.reference_strain_rate])[0])
 
+    @property
+    def scales(self) -> Scales:
+        return Scales(self.process.velocity, self.geometry.entry_thickness, self.reference_strain_rate,
+                      self.reference_flow_stress)
+
     def to_dict(self) -> dict[str, Any]:
         """Every resolved value, section by section."""
         return {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self)}
@@ -377,6 +512,8 @@ def _coerce(key: str, value: Any, tp: Any) -> Any:
     if not ok:
         raise SceneError(key, f"must be {_typename(tp)}; got {value!r}")
     if base is float:
+        if not math.isfinite(value):
+            raise SceneError(key, f"must be a finite number; got {value!r}")
         return float(value)
     if base is dict:
         return dict(value)
@@ -413,7 +550,8 @@ def _material(table: dict[str, Any], defaults: dict[str, Any]) -> FlowLaw:
     return _build(LAWS[law], table, "material", {k: v for k, v in defaults.items() if k in names})
 
 
-SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output")
+SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output",
+            "units")
 
 
 def scene_from_dict(data: dict[str, Any]) -> Scene:
@@ -434,9 +572,10 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     process = _build(Process, tables["process"], "process", defaults.get("process"))
     process.check()
     classes = {"geometry": GEOMETRIES[kind], "friction": Friction, "penalty": Penalty,
-               "discretisation": Discretisation, "solver": Solver, "output": Output}
+               "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units}
     built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
     scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {})), **built)
+    scene.resolve()
     scene.check()
     return scene
 

@@ -367,7 +367,12 @@ class SecantSolver:
             problem.u.x.scatter_forward()
             return True
         problem.set_uniform_secant(problem.scene.reference_strain_rate)
-        return math.isfinite(self._step(result, 0, 0, start))
+        if math.isfinite(self._step(result, 0, 0, start)):
+            return True
+        result.reason = result.reason or ("the first solve, with the uniform modulus G(reference strain rate), "
+                                          "gave a non-finite velocity: check the material constants and "
+                                          "solver.reference_strain_rate")
+        return False
 
     def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
         """Iterate until the stopping rule of (4.4) holds, from ``initial`` (a restart: u_{0,0} of the
@@ -412,7 +417,8 @@ class SecantSolver:
                 if self._must_stop(result, increments, outer, inner, friction_note):
                     return result
                 # with an outer (friction) loop, the force balance is checked when that loop converges
-                if increment < delta and (outer_limit > 1 or self._balanced(result)):
+                settled = problem.contact_settled(increment)
+                if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
                     break
             else:
                 result.reason = (f"no convergence in {settings.max_iterations} iterations "
