@@ -16,9 +16,21 @@ def shared_tmp(tmp_path: Path) -> Path:
     return Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0))
 
 
+# The paper's absolute penalties of Examples 1 and 2 and its pure penalty contact, which the tests of
+# the paper's examples were written for; a test that names a penalty (absolute or relative) replaces
+# the paper's value.
+PAPER_PENALTIES = {"extrusion": {"penalty": {"d": 1e-3, "d_N": 1e-6, "augmented": False}, "friction": {"d_T": 1e-6}},
+                   "drawing": {"penalty": {"d": 5e-3, "d_N": 1e-2, "augmented": False}, "friction": {"d_T": 1e-6}}}
+
+
 def make_scene(**sections) -> Scene:
-    """An extrusion scene with the given section overrides, e.g. make_scene(friction={"mu": 0.1})."""
+    """An extrusion scene with the given section overrides, e.g. make_scene(friction={"mu": 0.1}),
+    and the paper's penalties unless a section names its own."""
     data = {"process": {"kind": "extrusion"}, "output": {"fields": False, "figures": False}}
+    kind = sections.get("process", {}).get("kind", "extrusion")
+    for name, values in PAPER_PENALTIES[kind].items():
+        given = {key.removesuffix("_relative") for key in sections.get(name, {})}
+        data[name] = {key: value for key, value in values.items() if key not in given}
     for name, values in sections.items():
         data.setdefault(name, {}).update(values)
     return scene_from_dict(data)

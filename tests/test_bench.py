@@ -13,8 +13,8 @@ from forming_fenicsx.bench import compare, median_run, run_case
 def test_run_case_in_process_gives_a_full_row():
     row = run_case({"example": 1, "mesh_size": 1.0, "method": "newton"})
     assert row["converged"] and row["ranks"] == MPI.COMM_WORLD.size and row["linear_solves"] <= 15
-    split = sum(row[f"{key}_s"] for key in ("setup", "assembly", "factorisation", "solve", "rest"))
-    assert abs(split - row["wall_time_s"]) < 0.5 * row["wall_time_s"]  # the rest is post-processing
+    split = sum(row[f"{key}_s"] for key in ("setup", "assembly", "factorisation", "solve", "rest", "postprocess"))
+    assert abs(split - row["wall_time_s"]) < 0.1 * row["wall_time_s"]  # the parts cover the run
     assert row["factorisation_s"] > 0 and row["peak_memory_mb"] > 50
     assert row["exact"] is not None and abs(row["value"] / row["exact"] - 1) < 0.2
 

@@ -12,8 +12,14 @@ EXACT_EXIT = 1.625 * (1 - 2 * math.sin(math.radians(6)) / (1 + 2 * math.sin(math
 EXACT_Q = 2 * K * (1 + math.radians(6)) * EXACT_EXIT / 1.625   # Hill's field: 2k(1 + a)(1 - r)
 
 
+def resolved(geometry: DrawingGeometry) -> DrawingGeometry:
+    """The geometry with the lengths left out filled in (Example 2's)."""
+    geometry.resolve()
+    return geometry
+
+
 def test_triangulation_covers_the_strip_with_crossed_diagonals():
-    geometry = DrawingGeometry()
+    geometry = resolved(DrawingGeometry())
     points, triangles, edges = strip_triangulation(geometry, 0.05, 0.2)
     corners = points[triangles]
     doubled = ((corners[:, 1, 0] - corners[:, 0, 0]) * (corners[:, 2, 1] - corners[:, 0, 1])
@@ -37,7 +43,7 @@ def test_triangulation_covers_the_strip_with_crossed_diagonals():
 
 def test_bounds_bracket_the_exact_slip_line_load():
     """Where Hill's field is exact (r = 0.1729) the lower bound is within 1 % below and the upper bound above."""
-    geometry = DrawingGeometry(exit_thickness=EXACT_EXIT)
+    geometry = resolved(DrawingGeometry(exit_thickness=EXACT_EXIT))
     low = lower_bound(geometry, K, 0.1, 0.4, sides=32)
     high = upper_bound(geometry, K, 0.1, 0.4, sides=32)
     assert 0.99 * EXACT_Q < low.die_pressure <= EXACT_Q
@@ -48,6 +54,6 @@ def test_bounds_bracket_the_exact_slip_line_load():
 def test_paper_load_lies_above_the_quoted_slip_line_value():
     """An equilibrium stress field carries a die pressure above 250 = 2.5 k: the quoted value is below the
     load of the paper's strip (docs/example2.md)."""
-    low = lower_bound(DrawingGeometry(), K, 0.05, 0.2, sides=24)
+    low = lower_bound(resolved(DrawingGeometry()), K, 0.05, 0.2, sides=24)
     assert low.die_pressure > 1.015 * 250.0
     assert low.drawing_stress == pytest.approx(low.die_pressure * 0.0625 / 0.75)

@@ -15,13 +15,20 @@ def test_piecewise_power_law_branches():
     assert np.allclose(law.flow_stress(rates), expected, rtol=1e-14)
 
 
+def test_power_law_floor_relative_to_the_process_rate():
+    law = PowerLaw(A=3.0, n=0.5).resolve(100.0)
+    assert (law.rate_floor, law.rate_floor_relative) == (pytest.approx(1e-4, rel=1e-12), 1e-6)
+    with pytest.raises(SceneError, match="both"):
+        PowerLaw(rate_floor=1e-4, rate_floor_relative=1e-6).resolve(1.0)
+
+
 def test_power_law_floor():
     law = PowerLaw(A=3.0, n=0.5, rate_floor=1e-4)
     assert law.flow_stress(np.array([4.0]))[0] == pytest.approx(6.0, rel=1e-14)
     assert law.secant(np.array([0.0]))[0] == pytest.approx(3.0 * 1e-4**-0.5, rel=1e-14)
 
 
-@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0), PowerLaw(n=0.3)])
+@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0), PowerLaw(n=0.3).resolve(1.0)])
 def test_condition_2_10(law):
     """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant non-increasing."""
     rates = np.logspace(-8, 6, 2001)

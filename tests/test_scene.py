@@ -17,7 +17,13 @@ def test_defaults_are_the_papers_example1():
     assert (scene.geometry.length, scene.geometry.entry_thickness, scene.geometry.exit_thickness) == (20, 10, 5)
     assert scene.material.A == pytest.approx(3**0.5)
     assert (scene.material.alpha, scene.material.rate1, scene.material.rate2) == (1e-3, 1e-3, 1e3)
-    assert (scene.penalty.d, scene.penalty.d_N, scene.friction.d_T) == (1e-3, 1e-6, 1e-6)
+    # The default penalties are relative to the scene's scales (docs/penalties.md)
+    rate, stress = scene.scales.strain_rate, scene.scales.flow_stress
+    assert (scene.scales.velocity, scene.scales.length) == (1.0, 10.0) and rate == pytest.approx(0.1)
+    assert stress == pytest.approx(scene.material.flow_stress(rate))
+    assert scene.penalty.d == pytest.approx(1e-4 * rate / stress, rel=1e-12)
+    assert scene.penalty.d_N == pytest.approx(1e-3 / stress, rel=1e-12)
+    assert scene.friction.d_T == pytest.approx(1e-6) and scene.penalty.augmented
     assert (scene.discretisation.element, scene.discretisation.volumetric_integration) == ("Q2", "reduced")
     assert scene.solver.tolerance == 1e-4
 
@@ -48,7 +54,7 @@ BAD = [
     ({"geometry": {"entry_thickness": 0.0}}, "geometry.entry_thickness", "> 0"),
     ({"geometry": {"exit_thickness": 10.0}}, "geometry.exit_thickness", "must be <"),
     ({"geometry": {"exit_thickness": 12.0}}, "geometry.exit_thickness", "reduce"),
-    ({"geometry": {"die_position": 25.0}}, "geometry.die_position", "geometry.length"),
+    ({"geometry": {"die_position": 25.0, "length": 20.0}}, "geometry.die_position", "geometry.length"),
     ({"friction": {"mu": -0.1}}, "friction.mu", ">= 0"),
     ({"friction": {"d_T": 0.0}}, "friction.d_T", "> 0"),
     ({"penalty": {"d": 0.0}}, "penalty.d", "> 0"),
@@ -76,7 +82,8 @@ BAD = [
     ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 0.0}}, "geometry.die_angle", "(0, 90)"),
     ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}}, "geometry.die_angle", "(0, 90)"),
     ({"process": {"kind": "drawing"}, "geometry": {"land_length": -0.1}}, "geometry.land_length", ">= 0"),
-    ({"process": {"kind": "drawing"}, "geometry": {"land_length": 9.0}}, "geometry.land_length", "end before"),
+    ({"process": {"kind": "drawing"}, "geometry": {"land_length": 9.0, "length": 7.8}},
+     "geometry.land_length", "end before"),
     ({"process": {"kind": "drawing"}, "geometry": {"exit_thickness": 1.625}}, "geometry.exit_thickness", "reduce"),
     ({"process": {"kind": "drawing"}, "friction": {"mollification_length": 0.0}}, "friction.mollification_length",
      "> 0"),
@@ -103,7 +110,8 @@ def test_drawing_defaults_are_the_papers_example2():
     assert scene.process.velocity == 1000.0 and scene.geometry.die_angle == 6.0
     assert scene.material.A == pytest.approx(100 * 3**0.5)
     assert (scene.penalty.d, scene.penalty.d_N, scene.friction.d_T) == (0.005, 0.01, 1e-6)
-    assert scene_from_dict({"process": {"kind": "drawing"}}).discretisation.element == "Q1"
+    assert not scene.penalty.augmented  # the paper's pure penalty contact
+    assert scene_from_dict({"process": {"kind": "drawing"}}).discretisation.element == "Q2"
     assert [load_scene(DEMOS / f"example2_drawing{s}.toml").friction.mu for s in ("", "_mu02", "_mu04")] == [
         0.0, 0.2, 0.4]
 

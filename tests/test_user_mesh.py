@@ -26,14 +26,14 @@ def test_round_trip_of_the_built_in_mesh(shared_tmp):
 
 
 def _discrete_mesh(path, quads, roles, nodes=None):
-    """A 2 x 1 block of unit squares from explicit node lists (gmsh node tags 1..6), with boundary
-    groups {role: [(n1, n2), ...]}."""
+    """Two quadrilaterals 2 long, 1 high at entry and 0.8 at exit, from explicit node lists (gmsh
+    node tags 1..6), with boundary groups {role: [(n1, n2), ...]}."""
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("user")
         surface = gmsh.model.addDiscreteEntity(2)
-        nodes = nodes or [0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 1, 0]
+        nodes = nodes or [0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 0.8, 0]
         gmsh.model.mesh.addNodes(2, surface, list(range(1, 7)), nodes)
         gmsh.model.mesh.addElementsByType(surface, 3, [], [n for quad in quads for n in quad])
         gmsh.model.addPhysicalGroup(2, [surface], 1)
@@ -102,13 +102,13 @@ def test_user_mesh_checks(case, shared_tmp):
     if RANK0:
         write(path)
     MPI.COMM_WORLD.barrier()
-    scene = make_scene(geometry={"mesh_file": str(path)}, discretisation={"mesh_size": 0.5})
     if message is None:
+        scene = make_scene(geometry={"mesh_file": str(path)}, discretisation={"mesh_size": 0.5})
         forming_mesh = build_mesh(scene)
         assert set(forming_mesh.roles) == set(ROLES)
         return
-    with pytest.raises(SceneError) as error:
-        build_mesh(scene)
+    with pytest.raises(SceneError) as error:  # when the scene is read, before any meshing
+        make_scene(geometry={"mesh_file": str(path)}, discretisation={"mesh_size": 0.5})
     assert error.value.key == "geometry.mesh_file"
     assert message in error.value.message
 

@@ -441,6 +441,11 @@ class FlowProblem:
         True when there is none or it has settled."""
         return self.multiplier is None or self.multiplier.settled(increment, self.scene.solver.tolerance)
 
+    @property
+    def contact_updates(self) -> int:
+        """How often the augmented contact's multiplier has been updated (0 without one)."""
+        return 0 if self.multiplier is None else self.multiplier.updates
+
     def freeze_friction(self, u: dolfinx.fem.Function) -> None:
         """tau_f from u: u_{0,m} of the modified method (3.33), u_n of the direct method (3.13)."""
         petsc_vec(u).copy(petsc_vec(self.u_friction))

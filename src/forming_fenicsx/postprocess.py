@@ -164,7 +164,8 @@ def die_penetration(problem: FlowProblem) -> float:
         return 0.0
     inflow = _integrate(problem, ufl.max_value(contact.normal_velocity(problem.u, problem.n), 0.0)
                         * problem.ds_contact)
-    return inflow / throughput(problem)
+    through = throughput(problem)
+    return inflow / through if through else math.nan
 
 
 def die_contact_fraction(problem: FlowProblem) -> float:

@@ -46,7 +46,10 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     setup = time.perf_counter() - start
     result = solver.solve(initial)
     solver.destroy()
+    post = time.perf_counter()
     problem.update_state(problem.u, friction_too=True)
+    numbers = scalars(problem)
+    post = time.perf_counter() - post
     body = {
         "scene": scene.to_dict(),
         "scales": dataclasses.asdict(scene.scales),
@@ -57,9 +60,9 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "outer_iterations": result.outer_iterations,
         "solve_error_estimate": result.solve_error,
         "restarted_from": str(restart) if restart is not None else None,
-        **scalars(problem),
+        **numbers,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
-        "time_split_s": time_split(comm, setup, result),
+        "time_split_s": time_split(comm, setup, result, post),
     }
     return problem, result, summarise(body, result, scene, comm)
 
@@ -82,14 +85,15 @@ def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI
     return summary
 
 
-def time_split(comm: MPI.Comm, setup: float, result: SolveResult) -> dict[str, float]:
-    """Seconds (the slowest rank's) in setup (mesh, spaces, compiled forms), and within the iteration in
-    assembly, factorisation, solves and the rest (state updates, projections, checks)."""
+def time_split(comm: MPI.Comm, setup: float, result: SolveResult, post: float) -> dict[str, float]:
+    """Seconds (the slowest rank's) in setup (mesh, spaces, compiled forms), within the iteration in
+    assembly, factorisation, solves and the rest (state updates, projections, checks), and in the
+    post-processing of the summary's numbers."""
     timings = result.timings
     rest = result.iteration_time - timings.assembly - timings.factorisation - timings.solve
     return {key: comm.allreduce(value, op=MPI.MAX) for key, value in
             (("setup", setup), ("assembly", timings.assembly), ("factorisation", timings.factorisation),
-             ("solve", timings.solve), ("rest", rest))}
+             ("solve", timings.solve), ("rest", rest), ("postprocess", post))}
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,

@@ -23,7 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from .scene import Scene
+from .scene import D_N_RELATIVE, D_RELATIVE, Scene
 from .solvers import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)
@@ -57,7 +57,7 @@ def die_penetration(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    f"Gamma3): the contact penalty d_N = {penalty.d_N:.3g} ({penalty.d_N_relative:.3g} times "
                    f"U/sigma0) is too soft for this die pressure, and the workpiece passes through the die "
                    f"instead of being formed by it. Use a smaller penalty.d_N_relative, or leave penalty.d_N "
-                   f"out for the default (a relative 1e-3)")
+                   f"out for the default (a relative {D_N_RELATIVE:g} with augmented contact)")
 
 
 def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> Finding | None:
@@ -69,8 +69,8 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding])
         causes.append("the die lets the workpiece through (above), so it is squeezed instead of formed")
     if penalty.d_relative > 0.01:
         causes.append(f"penalty.d = {penalty.d:.3g} is {penalty.d_relative:.3g} times rate0/sigma0, a soft "
-                      "volumetric penalty: use a smaller penalty.d_relative or leave penalty.d out (default "
-                      "1e-3; Theorem 3.1: the error falls like O(d))")
+                      f"volumetric penalty: use a smaller penalty.d_relative or leave penalty.d out (default "
+                      f"{D_RELATIVE:g}; Theorem 3.1: the error falls like O(d))")
     if scene.discretisation.element == "Q1" and scene.discretisation.volumetric_integration == "complete":
         causes.append("Q1 with complete integration of the penalty locks: use reduced integration or Q2")
     if not causes:

@@ -60,7 +60,7 @@ class _Strip:
     """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares.
 
     Lengths left out are the paper's example geometry (``PAPER``) scaled by entry_thickness over the
-    paper's (or exit_thickness over the paper's when only that is given). ``mesh_file`` names a Gmsh
+    paper's; the length left out keeps the paper's (scaled) length after the die. ``mesh_file`` names a Gmsh
     .msh file to use instead of the built-in geometry: its roles are the physical groups named
     gamma1_velocity ... gamma6_symmetry (as `forming mesh` writes them), and the thicknesses and length
     are read from it (scene values that disagree with it are rejected; die data do not apply).
@@ -87,12 +87,7 @@ class _Strip:
             self._from_mesh()
             return
         paper = self.PAPER
-        if self.entry_thickness is not None:
-            factor = self.entry_thickness / paper["entry_thickness"]
-        elif self.exit_thickness is not None:
-            factor = self.exit_thickness / paper["exit_thickness"]
-        else:
-            factor = 1.0
+        factor = 1.0 if self.entry_thickness is None else self.entry_thickness / paper["entry_thickness"]
         for key, value in paper.items():
             if getattr(self, key) is None and key != "length":
                 setattr(self, key, value if key == "die_angle" else value * factor)
@@ -216,7 +211,7 @@ class DrawingGeometry(_Strip):
 NORMAL_STRESSES = ("averaged", "local")
 # Default relative values (docs/penalties.md measures them): d = D_RELATIVE rate0/sigma0,
 # d_N = D_N_RELATIVE U/sigma0, d_T = D_T_RELATIVE U.
-D_RELATIVE = 1e-3
+D_RELATIVE = 1e-4
 D_N_RELATIVE = 1e-3
 D_T_RELATIVE = 1e-6
 
@@ -497,13 +492,16 @@ def _coerce(key: str, value: Any, tp: Any) -> Any:
     """Check a TOML value against a field type; integers are accepted where numbers are."""
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
+        errors = []
         for option in typing.get_args(tp):
             if option is type(None):
                 continue
             try:
                 return _coerce(key, value, option)
-            except SceneError:
-                pass
+            except SceneError as error:
+                errors.append(error)
+        if len(errors) == 1:  # e.g. float | None: the float's own message (finite, a number)
+            raise errors[0]
         raise SceneError(key, f"must be {_typename(tp)}; got {value!r}")
     base = origin or tp
     ok = {float: isinstance(value, (int, float)) and not isinstance(value, bool),

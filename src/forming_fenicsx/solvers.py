@@ -417,7 +417,10 @@ class SecantSolver:
                 if self._must_stop(result, increments, outer, inner, friction_note):
                     return result
                 # with an outer (friction) loop, the force balance is checked when that loop converges
+                updates = problem.contact_updates
                 settled = problem.contact_settled(increment)
+                if problem.contact_updates != updates:
+                    increments = []  # lambda moved: a new problem, whose increments start afresh
                 if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
                     break
             else:
