@@ -4,6 +4,8 @@ import json
 import logging
 import os
 import signal
+import subprocess
+import sys
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
@@ -140,3 +142,26 @@ def test_zero_pivot_stops_with_reason(shared_tmp):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False and summary["linear_solves"] == 0
     assert "linear solve failed at outer 0, inner 0" in summary["reason"]
+
+
+def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user_permissions(shared_tmp):
+    """A first run compiles every form (FFCx logs each gcc command through the root logger's handler,
+    about 30 lines before the fix): with --quiet a converged run without warnings prints nothing, and
+    the output folder gets the user's umask (it was mkdtemp's 0700). Run in a child process (rank 0)
+    with an empty form cache."""
+    out = shared_tmp / "quiet"
+    if MPI.COMM_WORLD.rank == 0:
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
+        env.update(XDG_CACHE_HOME=str(shared_tmp / "cold-cache"), OMPI_ALLOW_RUN_AS_ROOT="1",
+                   OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.cli", "run", DEMO, "--out", str(out),
+                               *COARSE, "--set", "output.fields=false", "--set", "output.figures=false"],
+                              capture_output=True, text=True, env=env, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert (shared_tmp / "cold-cache").is_dir()  # the forms were compiled, not taken from a cache
+        assert done.stdout == "" and done.stderr == ""
+        umask = os.umask(0)
+        os.umask(umask)
+        assert out.stat().st_mode & 0o777 == 0o777 & ~umask
+    MPI.COMM_WORLD.barrier()
+    assert json.loads((out / "summary.json").read_text())["warnings"] == []

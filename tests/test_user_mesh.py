@@ -117,3 +117,26 @@ def test_missing_file_is_a_scene_error(tmp_path):
     with pytest.raises(SceneError) as error:
         make_scene(geometry={"mesh_file": str(tmp_path / "none.msh")})
     assert error.value.key == "geometry.mesh_file"
+
+
+def test_thicknesses_come_from_the_mesh_file(shared_tmp):
+    """A drawing mesh of a 1.625 -> 1.4 strip: the scene takes its thicknesses and length from the file
+    (the drawing stress divides by the mesh's exit half-thickness, not a default), refuses values that
+    disagree and die keys that cannot apply."""
+    built_in = make_scene(process={"kind": "drawing"}, geometry={"exit_thickness": 1.4},
+                          discretisation={"mesh_size": 0.2})
+    path = shared_tmp / "drawing.msh"
+    if RANK0:
+        write_msh(built_in, path)
+    MPI.COMM_WORLD.barrier()
+    own = make_scene(process={"kind": "drawing"}, geometry={"mesh_file": str(path)},
+                     discretisation={"mesh_size": 0.2})
+    measured = (own.geometry.entry_thickness, own.geometry.exit_thickness, own.geometry.length)
+    assert measured == pytest.approx((1.625, 1.4, built_in.geometry.length), rel=1e-9)
+    assert own.geometry.thinnest == pytest.approx(0.7, rel=1e-9)
+    with pytest.raises(SceneError) as error:
+        make_scene(process={"kind": "drawing"}, geometry={"mesh_file": str(path), "exit_thickness": 1.5})
+    assert error.value.key == "geometry.exit_thickness" and "the mesh file" in error.value.message
+    with pytest.raises(SceneError) as error:
+        make_scene(process={"kind": "drawing"}, geometry={"mesh_file": str(path), "die_angle": 8.0})
+    assert error.value.key == "geometry.die_angle" and "does not apply" in error.value.message

@@ -11,7 +11,7 @@ the fix. Thresholds (docs/sanity.md gives the values measured on correct and bro
 | relative_divergence, penalty formulation | 0.1 | 0.5 |
 | drawing stress / yield stress of the drawn product | 0.9 | 0.99 |
 | exit_zone_rate_ratio (product deforming after the die) | | 0.1 |
-| free_surface_crossing | 2 % | 20 % |
+| free_surface_crossing | 5 % | 20 % |
 | die_contact_fraction | | 0 (no contact at all) |
 | plastic work at rates above rate2 of (4.5) | 10 % | |
 | plastic work at rates below rate1 of (4.5) | 50 % | |
@@ -30,7 +30,7 @@ PENETRATION = (0.01, 0.05)
 COMPRESSIBLE = (0.1, 0.5)
 DRAWING_LIMIT = (0.9, 0.99)
 EXIT_ZONE_RIGID = 0.1
-FREE_SURFACE = (0.02, 0.2)
+FREE_SURFACE = (0.05, 0.2)
 ABOVE_RATE2 = 0.1
 BELOW_RATE1 = 0.5
 
@@ -57,7 +57,8 @@ def die_penetration(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    f"Gamma3): the contact penalty d_N = {penalty.d_N:.3g} ({penalty.d_N_relative:.3g} times "
                    f"U/sigma0) is too soft for this die pressure, and the workpiece passes through the die "
                    f"instead of being formed by it. Use a smaller penalty.d_N_relative, or leave penalty.d_N "
-                   f"out for the default (a relative {D_N_RELATIVE:g} with augmented contact)")
+                   f"out and penalty.augmented at its default (true: augmented contact with a relative d_N of "
+                   f"{D_N_RELATIVE:g}, which does not let the workpiece through)")
 
 
 def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> Finding | None:
@@ -112,7 +113,8 @@ def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
     return _graded("free_surface_crossing", value, FREE_SURFACE,
                    f"{100 * value:.3g} % of the throughput crosses the free surfaces of the fixed domain (2.6): "
                    "the real free surface lies elsewhere and the forces are those of another shape. Usual "
-                   "causes: the product yields after the die, or the die leaves a gap the fixed domain ignores")
+                   "causes: the product yields after the die, the die leaves a gap the fixed domain ignores, "
+                   "or a coarse mesh (the crossing falls like the mesh size: refine discretisation.mesh_size)")
 
 
 def die_contact(summary: dict[str, Any], scene: Scene) -> Finding | None:

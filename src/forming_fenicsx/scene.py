@@ -425,7 +425,7 @@ class Scene:
     def resolve(self) -> None:
         """Turn the values left out or given relative into absolute ones, in the order they depend on each
         other: geometry (from the mesh file or the paper's, scaled), the scales, then penalties, the
-        slip regularisation, the power law's rate floor and the mesh size."""
+        slip regularisation, the power law's rate floor, the mesh size and the mollification length."""
         self.geometry.resolve()
         self.geometry.check()
         self.material = self.material.resolve(self.reference_strain_rate)
@@ -437,6 +437,8 @@ class Scene:
         self.penalty.resolve(scales)
         self.friction.resolve(scales)
         self.discretisation.resolve(self.geometry.thinnest, MESH_SIZE_RELATIVE[self.process.kind])
+        if self.friction.mollification_length is None:  # about one element, recorded as used
+            self.friction.mollification_length = self.discretisation.mesh_size
 
     def check(self) -> None:
         """Checks of each section, then of values that are valid alone but not together."""
@@ -455,9 +457,8 @@ class Scene:
 
     @property
     def mollification_length(self) -> float:
-        """Length of the normal-stress averaging: the scene's, else about one element."""
-        given = self.friction.mollification_length
-        return given if given is not None else self.discretisation.mesh_size
+        """Length of the normal-stress averaging: the scene's, else (resolved) the mesh size."""
+        return self.friction.mollification_length
 
     @property
     def reference_strain_rate(self) -> float:
