@@ -165,3 +165,14 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
         assert out.stat().st_mode & 0o777 == 0o777 & ~umask
     MPI.COMM_WORLD.barrier()
     assert json.loads((out / "summary.json").read_text())["warnings"] == []
+
+
+def test_a_run_leaves_no_petsc_options_behind():
+    """PETSc's options database holds 512 entries: each run's prefixed solver options are removed when
+    its solvers are destroyed (the whole suite in one process once filled it)."""
+    from petsc4py import PETSc
+
+    before = set(PETSc.Options().getAll())
+    solve_scene(load_scene(DEMO, ["discretisation.mesh_size=1.0", "solver.method=newton",
+                                  "discretisation.averaging=quadrature", "output.fields=false"]))
+    assert set(PETSc.Options().getAll()) == before

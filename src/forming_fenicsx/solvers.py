@@ -52,6 +52,7 @@ class LinearSolver:
             prefix = f"forming_{next(_prefixes)}_"
             self.ksp.setOptionsPrefix(prefix)
             options = PETSc.Options()
+            self._options = [prefix + key for key in petsc_options]  # removed by destroy
             for key, value in petsc_options.items():
                 options[prefix + key] = value
             self.ksp.setFromOptions()
@@ -122,9 +123,15 @@ class LinearSolver:
         return self._correction.norm() / norm if norm > 0 else 0.0
 
     def destroy(self) -> None:
+        """Free the PETSc objects and the options set under this solver's prefix: PETSc's options
+        database holds 512 entries, and every run would otherwise leave its own there."""
         owned = (self.ksp, self.A) if self._owner else ()
         for item in (*owned, self.b, self._residual, self._correction):
             item.destroy()
+        if self._owner:
+            options = PETSc.Options()
+            for name in self._options:
+                options.delValue(name)
 
 
 @dataclass
