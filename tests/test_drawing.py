@@ -70,15 +70,18 @@ def test_drawing_run_writes_die_profile(shared_tmp):
 
 
 def test_drawing_same_numbers_on_one_and_all_ranks():
-    scene = make_scene(process={"kind": "drawing"}, discretisation={"mesh_size": 0.15}, friction={"mu": 0.2})
+    # the paper's Q1 with complete integration (Q2 reduced differs by 1.4e-8 in the force on 2 ranks
+    # with dolfinx 0.9: the summation order's round-off, carried through the iteration)
+    scene = make_scene(process={"kind": "drawing"}, friction={"mu": 0.2},
+                       discretisation={"mesh_size": 0.15, "element": "Q1", "volumetric_integration": "complete"})
     parallel = solve_scene(scene, comm=MPI.COMM_WORLD)[2]
     serial = solve_scene(scene, comm=MPI.COMM_SELF)[2]
     assert parallel["linear_solves"] == serial["linear_solves"]
     for key in ("drawing_force", "drawing_stress", "mean_die_pressure", "contact_length", "die_force_x",
                 "die_friction_force_x"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-8), key
-    # a difference of two forces over a force: the forces' 1e-8 (measured 1.1e-8 apart with Q2)
-    assert parallel["force_balance_residual"] == pytest.approx(serial["force_balance_residual"], abs=1e-7)
+    # a difference of two forces: its relative precision is that of the forces over the residual
+    assert parallel["force_balance_residual"] == pytest.approx(serial["force_balance_residual"], abs=1e-8)
 
 
 def test_exact_slip_line_field_is_approached_from_above():
