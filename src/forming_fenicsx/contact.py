@@ -1,8 +1,8 @@
 """Unilateral contact on Gamma3: the penalty (3.4), sigma_N = -u_N^+/d_N, optionally augmented.
 
 Augmented (penalty.augmented, the default): sigma_N = -(lambda + u_N/d_N)^+ with a multiplier lambda >= 0
-updated after every iterate by lambda <- (lambda + u_N/d_N)^+ (Uzawa's method for the augmented
-Lagrangian). At its fixed point lambda > 0 where u_N = 0 and u_N <= 0 where lambda = 0: the unilateral
+updated by lambda <- (lambda + u_N/d_N)^+ once the iterate has nearly settled (Uzawa's method for the
+augmented Lagrangian, ContactMultiplier). At its fixed point lambda > 0 where u_N = 0 and u_N <= 0 where lambda = 0: the unilateral
 condition (2.9) holds exactly, and d_N only sets how fast lambda converges. The pure penalty (the
 paper's) lets the workpiece into the die at u_N = d_N sigma_N, which in a confined rigid zone (the
 container of an extrusion) compresses it at a spurious rate and shifts the wall pressure by a spurious

@@ -166,7 +166,7 @@ class FlowProblem:
         if self.has_friction and scene.friction.normal_stress == "averaged":
             self.normal_stress_average = BoundaryFilter(
                 self.friction_normal_stress(), mesh, self.facet_tags, ROLES["gamma3_contact"],
-                scene.mollification_length, scene.solver.petsc_options, "averaged_normal_stress")
+                scene.friction.mollification_length, scene.solver.petsc_options, "averaged_normal_stress")
         self.bcs = self._boundary_conditions()
 
         if self.mixed:

@@ -16,10 +16,9 @@ import numpy as np
 from mpi4py import MPI
 
 from .errors import SceneError
-from .msh import check_msh, gmsh_session
+from .msh import gmsh_session, open_msh
 from .roles import ROLES, WORKPIECE
 from .scene import Scene
-
 
 
 @dataclass(frozen=True)
@@ -205,8 +204,8 @@ def _one_scotch_thread():
 
 def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
-    or read and check the scene's own .msh file (geometry.mesh_file). The partition repeats from run to
-    run (_one_scotch_thread)."""
+    or read the scene's own .msh file (geometry.mesh_file, checked when the scene was read). The
+    partition repeats from run to run (_one_scotch_thread)."""
     from dolfinx.io import gmshio
     from dolfinx.mesh import meshtags
 
@@ -215,7 +214,7 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
         outcome: dict[int, int] | SceneError | None = None
         if comm.rank == 0:
             try:
-                outcome = check_msh(mesh_file)[0] if mesh_file else None
+                outcome = open_msh(mesh_file) if mesh_file else None
                 if not mesh_file:
                     _generate(scene)
             except SceneError as error:

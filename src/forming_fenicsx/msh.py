@@ -57,9 +57,27 @@ def _quad_jacobians() -> np.ndarray:
     return np.concatenate(values)
 
 
-def check_msh(path: str) -> tuple[dict[int, int], MeshDimensions]:
-    """Open a user's .msh in the current gmsh session and check it; returns file tag -> role tag and the
-    workpiece's dimensions.
+def _open(path: str) -> None:
+    try:
+        gmsh.open(path)
+    except Exception as error:
+        raise SceneError("geometry.mesh_file", f"{path}: Gmsh cannot read it ({error})") from error
+
+
+def _role_names() -> dict[int, str]:
+    """The current model's boundary groups: file tag -> name."""
+    return {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in gmsh.model.getPhysicalGroups() if dim == 1}
+
+
+def open_msh(path: str) -> dict[int, int]:
+    """Open a user's .msh (checked when the scene was read: mesh_dimensions) in the current gmsh
+    session; returns file tag -> role tag."""
+    _open(path)
+    return {tag: ROLES[name] for tag, name in _role_names().items()}
+
+
+def _check_msh(path: str) -> MeshDimensions:
+    """Open a user's .msh in the current gmsh session and check it; returns the workpiece's dimensions.
 
     Raises SceneError (key geometry.mesh_file) for a mesh that is not plane 2-D, has cells other than
     quadrilaterals, misses a required role, names unknown roles, gives one edge two roles, or has
@@ -68,10 +86,7 @@ def check_msh(path: str) -> tuple[dict[int, int], MeshDimensions]:
     def fail(message: str) -> None:
         raise SceneError("geometry.mesh_file", f"{path}: {message}")
 
-    try:
-        gmsh.open(path)
-    except Exception as error:
-        fail(f"Gmsh cannot read it ({error})")
+    _open(path)
     groups = gmsh.model.getPhysicalGroups()
     if any(dim == 3 for dim, _ in groups) or len(gmsh.model.mesh.getElementTypes(3)):
         fail("a 3-D mesh; only plane (2-D) meshes are supported")
@@ -85,7 +100,7 @@ def check_msh(path: str) -> tuple[dict[int, int], MeshDimensions]:
              if t not in QUADRILATERALS]
     if other:
         fail(f"unsupported cells ({', '.join(other)}); use 4- or 9-node quadrilaterals")
-    names = {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in groups if dim == 1}
+    names = _role_names()
     unknown = sorted(name for name in names.values() if name not in ROLES)
     if unknown:
         fail(f"unknown boundary role names {unknown}; allowed: {', '.join(ROLES)}")
@@ -114,11 +129,10 @@ def check_msh(path: str) -> tuple[dict[int, int], MeshDimensions]:
         fail(f"nodes below y = 0 (down to y = {y.min():.6g}): the half model lies on y >= 0 with its "
              "symmetry line on y = 0")
     upstream, downstream = x <= x.min() + 1e-9 * extent, x >= x.max() - 1e-9 * extent
-    dimensions = MeshDimensions(2 * float(y[upstream].max()), 2 * float(y[downstream].max()), float(np.ptp(x)))
-    return {tag: ROLES[name] for tag, name in names.items()}, dimensions
+    return MeshDimensions(2 * float(y[upstream].max()), 2 * float(y[downstream].max()), float(np.ptp(x)))
 
 
 def mesh_dimensions(path: str) -> MeshDimensions:
-    """Check a user's .msh file (check_msh) in a gmsh session of its own and return its dimensions."""
+    """Check a user's .msh file (_check_msh) in a gmsh session of its own and return its dimensions."""
     with gmsh_session():
-        return check_msh(path)[1]
+        return _check_msh(path)

@@ -298,13 +298,10 @@ class NewtonSolver(SecantSolver):
             # a step the line search cut does not end the run: its short full step says little about the
             # distance to the answer when the energy along it is far from the Newton model
             full = result.history[-1].step >= 1.0
-            updates = problem.contact_updates
-            settled = full and problem.contact_settled(increment)
-            if problem.contact_updates != updates:
-                increments = []  # lambda moved: a new problem, whose increments start afresh
+            settled = full and self._contact_settled(increment, increments)
             if increment < settings.tolerance and settled and self._balanced(result):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
-                         f"{increments[-1]:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})")
+                         f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})")
         return result

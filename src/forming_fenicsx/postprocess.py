@@ -169,7 +169,7 @@ def die_penetration(problem: FlowProblem) -> float:
 
 
 def die_contact_fraction(problem: FlowProblem) -> float:
-    """The length of Gamma3 in contact (u_N > 0) over the length of Gamma3."""
+    """The length of Gamma3 in contact (a positive contact pressure) over the length of Gamma3."""
     if not problem.has_contact:
         return math.nan
     ds = problem.ds_contact

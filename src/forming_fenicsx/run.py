@@ -70,7 +70,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
 def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
     """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
     converged (a failed check means it did not, whatever the iteration did) and why, the units, then the
-    run's numbers. Warnings and failures are logged on rank 0."""
+    run's numbers. Warnings are logged on rank 0 (a failure is the reason the command prints)."""
     findings = check_run(body, scene)
     failures = [f.message for f in findings if f.failure]
     converged = result.converged and not failures

@@ -262,8 +262,8 @@ class Penalty:
     (sigma_N = -u_N^+ / d_N), absolute, or relative to the scene's scales (the default):
     d = d_relative rate0 / sigma0 (div u / rate0 = d_relative sigma_H / sigma0) and
     d_N = d_N_relative U / sigma0 (u_N / U = d_N_relative sigma_N / sigma0). ``augmented``: the contact
-    pressure is carried by a multiplier updated after every iterate, so that the workpiece does not
-    enter the die (contact.py); false is the paper's pure penalty."""
+    pressure is carried by a multiplier updated once the iterate settles, so that the workpiece does
+    not enter the die (contact.py); false is the paper's pure penalty."""
 
     d: float | None = None
     d_N: float | None = None
@@ -454,11 +454,6 @@ class Scene:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
                              f"at least one element spans it; got {self.discretisation.mesh_size}")
-
-    @property
-    def mollification_length(self) -> float:
-        """Length of the normal-stress averaging: the scene's, else (resolved) the mesh size."""
-        return self.friction.mollification_length
 
     @property
     def reference_strain_rate(self) -> float:

@@ -381,6 +381,17 @@ class SecantSolver:
                                           "solver.reference_strain_rate")
         return False
 
+    def _contact_settled(self, increment: float, increments: list[float]) -> bool:
+        """The augmented contact's multiplier step after an iterate (FlowProblem.contact_settled); when
+        it moves lambda, ``increments`` starts afresh: the divergence and stall checks then judge the
+        new problem's iterates, not the jump the update causes."""
+        problem = self.problem
+        updates = problem.contact_updates
+        settled = problem.contact_settled(increment)
+        if problem.contact_updates != updates:
+            increments.clear()
+        return settled
+
     def solve(self, initial: dolfinx.fem.Function | None = None) -> SolveResult:
         """Iterate until the stopping rule of (4.4) holds, from ``initial`` (a restart: u_{0,0} of the
         method) or else from the solution with a uniform modulus; with the time split of the run."""
@@ -424,10 +435,7 @@ class SecantSolver:
                 if self._must_stop(result, increments, outer, inner, friction_note):
                     return result
                 # with an outer (friction) loop, the force balance is checked when that loop converges
-                updates = problem.contact_updates
-                settled = problem.contact_settled(increment)
-                if problem.contact_updates != updates:
-                    increments = []  # lambda moved: a new problem, whose increments start afresh
+                settled = self._contact_settled(increment, increments)
                 if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
                     break
             else:
