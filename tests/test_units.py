@@ -3,6 +3,7 @@ results independent of the unit system and, for a rate power law, of the velocit
 own rate factor; the old absolute penalties in the wrong units end with a failed check, not a
 converged wrong answer."""
 import math
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,37 +14,16 @@ from forming_fenicsx.scene import read_scene_data, scene_from_dict
 
 DEMOS = Path(__file__).parents[1] / "demos"
 
-PSI = 6894.757293168361  # Pa
-# (length unit in mm, stress unit in MPa, labels)
-SYSTEMS = {"mm": (1.0, 1.0, ("mm", "s", "MPa", "N")), "m": (1e3, 1e-6, ("m", "s", "Pa", "N")),
-           "in": (25.4, PSI * 1e-6, ("in", "s", "psi", "lbf"))}
-N = 0.1  # rate sensitivity of sigma = A rate^n: a velocity lam times larger multiplies stresses by lam^n
+sys.path.insert(0, str(DEMOS))
+from unit_systems import N, SYSTEMS, dimensionless  # noqa: E402  (the demo's scenes, run here)
 
 
-def scene(kind: str, system: str, velocity: float, **extra):
-    """A coarse Newton run of one process in mm, MPa (velocity in mm/s), written in another unit system:
-    drawing 2.0 -> 1.6 mm through a 10 degree die, or square-die extrusion 20 -> 12 mm; mu = 0.08,
-    sigma = 300 MPa (rate in 1/s)^0.1."""
-    length, stress, names = SYSTEMS[system]
-    geometry = ({"entry_thickness": 2.0, "exit_thickness": 1.6, "die_angle": 10.0} if kind == "drawing"
-                else {"entry_thickness": 20.0, "exit_thickness": 12.0})
-    return scene_from_dict({
-        "process": {"kind": kind, "velocity": velocity / length},
-        "geometry": {key: value if key == "die_angle" else value / length for key, value in geometry.items()},
-        "material": {"law": "power", "A": 300.0 / stress, "n": N}, "friction": {"mu": 0.08},
-        "discretisation": {"mesh_size_relative": 0.5, "averaging": "quadrature"},
-        "solver": {"method": "newton"}, "units": dict(zip(("length", "time", "stress", "force"), names)),
-        "output": {"fields": False, "figures": False}, **extra})
-
-
-def dimensionless(kind: str, system: str, velocity: float) -> tuple[float, float]:
-    """(process stress over the flow stress at the process rate, process stress in MPa)."""
-    run = scene(kind, system, velocity)
-    summary = solve_scene(run)[2]
+def checked(kind: str, system: str, velocity: float) -> tuple[float, float]:
+    """demos/unit_systems.py's run, converged without a failed check, its units in the summary."""
+    ratio, stress, summary = dimensionless(kind, system, velocity)
     assert summary["converged"] and not summary["failed_checks"]
     assert summary["units"]["stress"] == SYSTEMS[system][2][2]
-    value = summary["drawing_stress" if kind == "drawing" else "ram_pressure"]
-    return value / run.scales.flow_stress, value * SYSTEMS[system][1]
+    return ratio, stress
 
 
 @pytest.mark.parametrize("kind", ["drawing", "extrusion"])
@@ -51,12 +31,12 @@ def test_three_unit_systems_and_velocities_1e_3_to_1e3_give_one_dimensionless_an
     """Measured: drawing sigma_d/sigma0 = 0.41303 (115.6 MPa at 1 mm/s), extrusion p/sigma0 = 1.77449;
     the systems and velocities agree to 1e-7. The stress itself scales by lam^n = 1000^0.1 = 1.9953
     from 1 to 1000 mm/s."""
-    base, stress = dimensionless(kind, "mm", 1.0)
+    base, stress = checked(kind, "mm", 1.0)
     for system in ("m", "in"):
-        other, other_stress = dimensionless(kind, system, 1.0)
+        other, other_stress = checked(kind, system, 1.0)
         assert other == pytest.approx(base, rel=1e-6) and other_stress == pytest.approx(stress, rel=1e-6)
     for velocity in (1e-3, 1e3):
-        other, other_stress = dimensionless(kind, "mm", velocity)
+        other, other_stress = checked(kind, "mm", velocity)
         assert other == pytest.approx(base, rel=1e-6)
         assert other_stress == pytest.approx(stress * velocity**N, rel=1e-6)
     ideal = math.log(2.0 / 1.6) if kind == "drawing" else math.log(20.0 / 12.0)
@@ -94,18 +74,19 @@ def test_example2_at_velocity_1_right_by_default_and_a_clear_no_with_the_papers_
 
 @pytest.mark.parametrize("system", ["mm", "m"])
 def test_strip_in_mm_and_m_right_by_default_and_a_clear_no_with_old_absolute_penalties(system):
-    """2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa at 1 mm/s: with the old default
+    """demos/strip_mm.toml: 2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa at 1 mm/s
+    (default mesh, 30k unknowns, 4 s). With the old default
     penalties (d = 0.005, d_N = 0.01 absolute) it gave 6.3 MPa (6.36 Pa in m), far below the ideal
     work 2/sqrt3 300 ln(2/1.6) = 77.3 MPa; now that run fails with the cause, and the default penalties
     give 120.0 MPa in both systems (measured 119.996; 121.37 and 122.89 at mesh_size_relative 0.1
     and 0.15)."""
     length, stress, names = SYSTEMS[system]
-    common = {"process": {"kind": "drawing", "velocity": 1.0 / length},
-              "geometry": {"entry_thickness": 2.0 / length, "exit_thickness": 1.6 / length, "die_angle": 10.0},
-              "material": {"law": "piecewise_power", "A": 300.0 / stress}, "friction": {"mu": 0.08},
-              "discretisation": {"averaging": "quadrature"},  # the default mesh: 30k unknowns, 4 s
-              "solver": {"method": "newton"}, "units": dict(zip(("length", "time", "stress", "force"), names)),
-              "output": {"fields": False, "figures": False}}
+    common = read_scene_data(DEMOS / "strip_mm.toml", ["output.fields=false", "output.figures=false"])
+    common["process"]["velocity"] /= length  # written in the other system
+    for key in ("entry_thickness", "exit_thickness"):
+        common["geometry"][key] /= length
+    common["material"]["A"] /= stress
+    common["units"] = dict(zip(("length", "time", "stress", "force"), names))
     right = solve_scene(scene_from_dict(common))[2]
     assert right["converged"] and not right["failed_checks"]
     assert right["drawing_stress"] * stress == pytest.approx(120.0, rel=2e-3)

@@ -148,6 +148,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
-        log.info("%s %.5g, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
-                 summary[key], summary["force_balance_residual"], summary["linear_solves"], summary["wall_time_s"])
+        unit = scene.units.label("stress")
+        log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
+                 summary[key], f" {unit}" if unit else "", summary["force_balance_residual"],
+                 summary["linear_solves"], summary["wall_time_s"])
     return summary
