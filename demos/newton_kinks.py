@@ -22,7 +22,6 @@ import dolfinx.fem
 from forming_fenicsx import contact, load_scene
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.kinematics import equivalent_strain_rate
 from forming_fenicsx.newton import NewtonSolver
 from forming_fenicsx.report import markdown_table
 
@@ -39,7 +38,7 @@ u, last = problem.u, problem.u.copy()
 
 
 def below(w, rate):
-    return ufl.conditional(ufl.lt(equivalent_strain_rate(w), rate), 1.0, 0.0)
+    return ufl.conditional(ufl.lt(problem.equivalent_strain_rate(w), rate), 1.0, 0.0)
 
 
 def active(w):

@@ -36,7 +36,7 @@ def solve_box(material: dict, element: str, averaging: str, exact) -> FlowProble
                                            dolfinx.fem.locate_dofs_topological(problem.V, 1, facets))]
     result = SecantSolver(problem).solve()
     assert result.converged and result.linear_solves <= 3
-    problem.update_state(problem.u, friction_too=True)
+    problem.update_state(problem.u, frozen_too=True)
     return problem
 
 

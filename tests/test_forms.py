@@ -7,7 +7,9 @@ import ufl
 from petsc4py import PETSc
 
 from forming_fenicsx.compat import petsc_vec
-from forming_fenicsx.forms import FlowProblem, SplitForm, quadrature_degree
+from forming_fenicsx.forms import FlowProblem, SplitForm
+from forming_fenicsx.measures import quadrature_degree
+from forming_fenicsx.newton_forms import newton_forms
 from forming_fenicsx.geometry import build_mesh
 from forming_fenicsx.solvers import SecantSolver
 
@@ -24,9 +26,9 @@ def test_no_friction_term_at_zero_friction():
     averaged = problem_for(friction={"mu": 0.1})
     local = problem_for(friction={"mu": 0.1, "normal_stress": "local"})
     assert frictionless.normal_stress_average is None and local.normal_stress_average is None
-    assert frictionless.u_friction not in frictionless.a_ufl.coefficients()
+    assert frictionless.friction_state is None and frictionless.frozen == []
     assert averaged.normal_stress_average.value in averaged.a_ufl.coefficients()
-    assert local.u_friction in local.a_ufl.coefficients()
+    assert local.friction_state.state in local.a_ufl.coefficients()
     for rough in (averaged, local):
         assert len(rough.a_ufl.integrals()) == len(frictionless.a_ufl.integrals()) + 1
 
@@ -104,8 +106,8 @@ def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
                        solver={"method": "direct", "tolerance": 1e-2})
     problem = FlowProblem(scene, build_mesh(scene))
     SecantSolver(problem).solve()
-    problem.update_state(problem.u, friction_too=True)
-    forms = problem.newton_forms()
+    problem.update_state(problem.u, frozen_too=True)
+    forms = newton_forms(problem)
     newton_residual, secant_residual = forms.residual.vector(), problem.residual.vector()
     scale = _term_scale(forms.residual.ufl)
     assert _relative(newton_residual, _apart(forms.residual.ufl).vector(), scale) < 1e-13

@@ -40,7 +40,7 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
     problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
     SecantSolver(problem).solve()
     newton = NewtonSolver(problem)
-    problem.freeze_friction(problem.u)
+    problem.freeze(problem.u)
     set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
     u = petsc_vec(problem.u)
     newton.keep_previous()  # the contact active set at u alone, as at a first Newton step

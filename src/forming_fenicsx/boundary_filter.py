@@ -13,13 +13,17 @@ import ufl
 from petsc4py import PETSc
 
 from .compat import function_space, petsc_vec
+from .petsc_options import PrefixedOptions
 
 
 class BoundaryFilter:
     """The P1 field ``value`` on Gamma3 (zero elsewhere), ``source`` mollified over ``length``."""
 
-    def __init__(self, source, mesh, facet_tags, contact_tag: int, length: float, petsc_options: dict,
-                 name: str):
+    OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+
+    def __init__(self, source, mesh, facet_tags, contact_tag: int, length: float, name: str,
+                 prefix: str):
+        """``prefix``: the name of its PETSc options (petsc_options.py), defaults OPTIONS."""
         space = function_space(mesh, "P", 1)
         self.value = dolfinx.fem.Function(space, name=name)
         p, q = ufl.TrialFunction(space), ufl.TestFunction(space)
@@ -45,11 +49,10 @@ class BoundaryFilter:
         self._b = dolfinx.fem.petsc.create_vector(self._L)
         self._ksp = PETSc.KSP().create(mesh.comm)
         self._ksp.setOperators(self._A)
-        self._ksp.setType(petsc_options.get("ksp_type", "preonly"))
-        pc = self._ksp.getPC()
-        pc.setType(petsc_options.get("pc_type", "lu"))
-        if pc.getType() in ("lu", "cholesky"):
-            pc.setFactorSolverType(petsc_options.get("pc_factor_mat_solver_type", "mumps"))
+        options = PrefixedOptions(prefix, self.OPTIONS)
+        self._ksp.setOptionsPrefix(options.prefix)
+        self._ksp.setFromOptions()
+        options.release()  # all read by setFromOptions; a user's own (command line) stay
 
     def update(self) -> dolfinx.fem.Function:
         """Recompute the field from the current values of the source's coefficients."""
@@ -62,3 +65,4 @@ class BoundaryFilter:
         self._ksp.solve(self._b, petsc_vec(self.value))
         self.value.x.scatter_forward()
         return self.value
+

@@ -1,6 +1,9 @@
-"""Coulomb friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11).
+"""Friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11): Coulomb's law of the paper, or the
+friction factor law (the "shear friction" of bulk-forming codes, Chen and Kobayashi).
 
-j_dT(w, v) = int tau_f(w) sqrt(|v_T|^2 + d_T^2), with Gateaux derivative
+The bound tau_f(w) is Coulomb's mu sigma_N-bar (2.9), or m k with k = sigma_p(rate)/sqrt(3) the shear
+flow stress of the workpiece where it slides. j_dT(w, v) = int tau_f(w) sqrt(|v_T|^2 + d_T^2), with
+Gateaux derivative
 tau_f(w) v_T / sqrt(|v_T|^2 + d_T^2); the secant-modulus methods linearise it with the slip
 coefficient tau_f / sqrt(|u_n,T|^2 + d_T^2) of the current state.
 """
@@ -14,9 +17,16 @@ def tangential(u, n):
     return u - ufl.dot(u, n) * n
 
 
-def friction_bound(mu: float, normal_pressure):
+def coulomb_bound(mu: float, normal_pressure):
     """Coulomb bound tau_f = mu * sigma_N-bar (section 2), sigma_N-bar >= 0 the normal pressure."""
     return mu * normal_pressure
+
+
+def factor_bound(m: float, flow_stress):
+    """Friction factor bound tau_f = m k, k = sigma_p / sqrt(3) (0 <= m <= 1; m = 1 is sticking at
+    the shear flow stress): with the regularisation, tau = m k |u_T| / sqrt(|u_T|^2 + d_T^2), the
+    (2/pi) arctan(|u_T|/v_0) of Chen and Kobayashi with another smooth step."""
+    return m * flow_stress / 3.0**0.5
 
 
 def slip_coefficient(tau_f, u_state, n, d_T: float):

@@ -1,7 +1,7 @@
 """Newton's method with a backtracking line search for the regularised problem (3.10)-(3.12).
 
 The secant-modulus methods (3.13)/(3.33) converge linearly; Newton's method on the same residual
-(FlowProblem.newton_forms) converges fast once near the answer. Its tangent is only about alpha times
+(newton_forms.py) converges fast once near the answer. Its tangent is only about alpha times
 as stiff as the secant along the flow direction, so the iteration starts from the uniform-modulus
 solution and ``solver.secant_start`` direct secant iterates (the dual stress then starts at
 ``solver.dual_start`` times tau(u)), and every Newton step is damped by a
@@ -26,6 +26,7 @@ from petsc4py import PETSc
 
 from .compat import petsc_vec, set_at_quadrature_points
 from .errors import LinearSolveError
+from .newton_forms import newton_forms
 from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, Timings, log
 
 ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
@@ -79,7 +80,7 @@ class NewtonSolver(SecantSolver):
 
     def __init__(self, problem, petsc_options=None, balance=None, stop=None):
         super().__init__(problem, petsc_options, balance, stop)
-        self.forms = problem.newton_forms()
+        self.forms = newton_forms(problem)
         self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual.parts[0],
                                    matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
         self._velocity = problem.u.copy()  # the velocity before the current step
@@ -156,7 +157,7 @@ class NewtonSolver(SecantSolver):
         forms = self.forms
         problem, u = self.problem, petsc_vec(self.problem.solution)
         du = petsc_vec(forms.step)  # the dual update reads it and the previous iterate
-        problem.freeze_friction(problem.u)  # tau_f at u, as in the direct method (3.13)
+        problem.freeze(problem.u)  # tau_f (every frozen coefficient) at u, as in (3.13)
         residual = self.assemble_residual().norm()
         self.assemble_operator()
         law_switches, contact_switches = self.count_switches()
@@ -281,7 +282,7 @@ class NewtonSolver(SecantSolver):
             if problem.has_friction else ""
         increments: list[float] = []
         for inner in range(1, settings.secant_start + 1):
-            problem.update_state(problem.u, friction_too=True)
+            problem.update_state(problem.u, frozen_too=True)
             increments.append(self._step(result, 0, inner, start))
             if self._must_stop(result, increments, 0, inner, ""):
                 return result

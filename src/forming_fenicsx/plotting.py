@@ -7,7 +7,6 @@ import numpy as np
 
 from .compat import cell_geometry_nodes
 from .forms import FlowProblem
-from .kinematics import equivalent_strain_rate
 from .postprocess import cell_means
 from .units import Units
 
@@ -21,7 +20,7 @@ def _gather_cells(problem: FlowProblem):
     nodes = cell_geometry_nodes(mesh)[:owned][:, QUAD_OUTLINE]
     outlines = mesh.geometry.x[nodes][:, :, :2]
     degree = problem.full_degree
-    rate = cell_means(problem, equivalent_strain_rate(problem.u), "rate", degree).x.array[:owned]
+    rate = cell_means(problem, problem.equivalent_strain_rate(problem.u), "rate", degree).x.array[:owned]
     ux = cell_means(problem, problem.u[0], "ux", degree).x.array[:owned]
     uy = cell_means(problem, problem.u[1], "uy", degree).x.array[:owned]
     parts = problem.comm.gather((outlines, rate, ux, uy), root=0)

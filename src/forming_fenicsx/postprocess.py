@@ -20,7 +20,6 @@ from .compat import function_space, geometry_degree
 from .forms import FlowProblem
 from .geometry import die_coordinate
 from .roles import ROLES
-from .kinematics import equivalent_strain_rate, strain_rate
 from .projection import LumpedProjector
 
 
@@ -87,7 +86,7 @@ def die_pressure(problem: FlowProblem):
     the stress."""
     if problem.scene.output.die_pressure == "stress":
         n = problem.n
-        return -ufl.dot(n, ufl.dot(problem.stress(), n))
+        return -ufl.dot(n, ufl.dot(problem.coordinates.in_plane(problem.stress()), n))
     return problem.contact_pressure(problem.u)
 
 
@@ -183,7 +182,7 @@ def exit_zone_rate_ratio(problem: FlowProblem) -> float:
     x = ufl.SpatialCoordinate(problem.mesh)[0]
     end = problem.comm.allreduce(problem.mesh.geometry.x[:, 0].max(), op=MPI.MAX)
     zone = ufl.conditional(ufl.gt(x, end - problem.scene.geometry.exit_thickness), 1.0, 0.0)
-    rate = equivalent_strain_rate(problem.u)
+    rate = problem.equivalent_strain_rate(problem.u)
     mean = _integrate(problem, rate * problem.dx) / _integrate(problem, 1.0 * problem.dx)
     zone_mean = _integrate(problem, rate * zone * problem.dx) / _integrate(problem, zone * problem.dx)
     return zone_mean / mean if mean > 0 else math.nan
@@ -195,7 +194,7 @@ def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:
     law = problem.scene.material
     if not hasattr(law, "rate2"):
         return {}
-    rate = equivalent_strain_rate(problem.u)
+    rate = problem.equivalent_strain_rate(problem.u)
     power = law.secant_ufl(rate) * rate * rate
     total = _integrate(problem, power * problem.dx)
     if total <= 0:
@@ -218,7 +217,7 @@ def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, flo
 def relative_divergence(problem: FlowProblem, divergence: float) -> float:
     """||div u|| / ||e(u)|| (L2 norms over the strip), given ||div u||: the volume change the penalty 1/d
     leaves, per unit of deformation rate; Theorem 3.1 drives it to zero like O(d)."""
-    e = strain_rate(problem.u)
+    e = problem.strain_rate(problem.u)
     deformation = _integrate(problem, ufl.inner(e, e) * problem.dx)
     if deformation == 0:  # no deformation at all (e.g. a first solve that failed)
         return math.nan
@@ -229,7 +228,7 @@ def discrete_divergence(problem: FlowProblem) -> float:
     """|(q, div u)| over the pressure basis functions q (Euclidean norm): the incompressibility the mixed
     formulation imposes exactly (zero up to the linear solve), while ||div u|| itself is not zero."""
     q = ufl.TestFunction(problem.pressure.function_space)
-    vector = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(q * ufl.div(problem.u) * problem.dx))
+    vector = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(q * problem.divergence(problem.u) * problem.dx))
     vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     value = vector.norm()
     vector.destroy()
@@ -243,13 +242,13 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end.
     """
     residual, force, die_normal, die_friction, external = force_balance(problem)
-    divergence = float(np.sqrt(_integrate(problem, ufl.div(problem.u) ** 2 * problem.dx_vol)))
+    divergence = float(np.sqrt(_integrate(problem, problem.divergence(problem.u) ** 2 * problem.dx_vol)))
     if problem.scene.process.kind == "extrusion":
         height = _integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
         process = {"ram_force": force, "ram_pressure": force / height,
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
     else:
-        process = {"drawing_force": force, "drawing_stress": force / problem.scene.geometry.thinnest,
+        process = {"drawing_force": force, "drawing_stress": force / problem.coordinates.section(problem.scene.geometry.thinnest),
                    **drawing_scalars(problem)}
     return {
         **process,
@@ -282,7 +281,7 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
         velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
         velocity.interpolate(problem.u)
     sources = {
-        "equivalent_strain_rate": (equivalent_strain_rate(problem.u), problem.full_degree),
+        "equivalent_strain_rate": (problem.equivalent_strain_rate(problem.u), problem.full_degree),
         "hydrostatic_pressure": (problem.hydrostatic_stress(), problem.volumetric_degree),
         "secant_viscosity": (problem.secant_coefficient(), problem.full_degree),
     }

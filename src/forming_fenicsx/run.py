@@ -47,7 +47,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     result = solver.solve(initial)
     solver.destroy()
     post = time.perf_counter()
-    problem.update_state(problem.u, friction_too=True)
+    problem.update_state(problem.u, frozen_too=True)
     numbers = scalars(problem)
     post = time.perf_counter() - post
     body = {

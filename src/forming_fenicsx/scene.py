@@ -25,6 +25,7 @@ from typing import Any, ClassVar
 
 from .errors import SceneError
 from .material import LAWS, FlowLaw, PiecewisePowerLaw
+from .coordinates import SYMMETRIES
 from .msh import mesh_dimensions
 from .relative import check_positive, set_pair
 from .units import Units
@@ -71,20 +72,50 @@ class _Strip:
     LENGTH_KEY: ClassVar[str]  # the key named when the die does not fit in the strip
     entry_thickness: float | None
     exit_thickness: float | None
+    entry_diameter: float | None
+    exit_diameter: float | None
     length: float | None
     mesh_file: str | None
+    symmetry: str
+
+    @property
+    def axisymmetric(self) -> bool:
+        return self.symmetry == "axisymmetric"
+
+    def _diameters(self) -> None:
+        """A round product's diameters are the half model's full thicknesses: entry_diameter and
+        exit_diameter with symmetry = "axisymmetric", entry_thickness and exit_thickness for a strip."""
+        if self.symmetry not in SYMMETRIES:
+            raise SceneError("geometry.symmetry",
+                             f"must be one of {', '.join(SYMMETRIES)}; got {self.symmetry!r}")
+        for end in ("entry", "exit"):
+            thickness, diameter = f"{end}_thickness", f"{end}_diameter"
+            if not self.axisymmetric and getattr(self, diameter) is not None:
+                raise SceneError(f"geometry.{diameter}", 'names a round product: it needs geometry.symmetry'
+                                 f' = "axisymmetric" (a plane-strain strip has geometry.{thickness})')
+            if self.axisymmetric and getattr(self, thickness) is not None:
+                raise SceneError(f"geometry.{thickness}", "names a strip; a round product (symmetry = "
+                                 f'"axisymmetric") has geometry.{diameter}')
+            if self.axisymmetric:
+                setattr(self, thickness, getattr(self, diameter))
 
     @property
     def thinnest(self) -> float:
-        """Half-thickness of the thinnest section (the half model's exit)."""
+        """Half-thickness (radius) of the thinnest section (the half model's exit)."""
         return 0.5 * self.exit_thickness
+
+    def _record_diameters(self) -> None:
+        if self.axisymmetric:
+            self.entry_diameter, self.exit_diameter = self.entry_thickness, self.exit_thickness
 
     def resolve(self) -> None:
         """Fill in the lengths left out: from the mesh file, or the paper's geometry scaled."""
+        self._diameters()
         for key in ("entry_thickness", "exit_thickness"):
-            check_positive(f"geometry.{key}", getattr(self, key))
+            check_positive(f"geometry.{key.replace('thickness', self.thickness_name)}", getattr(self, key))
         if self.mesh_file is not None:
             self._from_mesh()
+            self._record_diameters()
             return
         paper = self.PAPER
         factor = 1.0 if self.entry_thickness is None else self.entry_thickness / paper["entry_thickness"]
@@ -94,6 +125,11 @@ class _Strip:
         self.check_die()
         if self.length is None:  # the paper's length after the die, scaled, so that the die always fits
             self.length = paper["length"] * factor + (self.die_end - self._paper_die_end() * factor)
+        self._record_diameters()
+
+    @property
+    def thickness_name(self) -> str:
+        return "diameter" if self.axisymmetric else "thickness"
 
     def _from_mesh(self) -> None:
         path = Path(self.mesh_file)
@@ -116,11 +152,11 @@ class _Strip:
 
     def check(self) -> None:
         """Lengths finite and > 0, a die that reduces the thickness and ends before the strip does."""
+        name = self.thickness_name
         for key in ("length", "entry_thickness", "exit_thickness"):
-            check_positive(f"geometry.{key}", getattr(self, key))
+            check_positive(f"geometry.{key.replace('thickness', name)}", getattr(self, key))
         if self.exit_thickness >= self.entry_thickness:
-            raise SceneError("geometry.exit_thickness",
-                             f"must be < geometry.entry_thickness ({self.entry_thickness}): "
+            raise SceneError(f"geometry.exit_{name}", f"must be < geometry.entry_{name} ({self.entry_thickness}): "
                              f"the die must reduce; got {self.exit_thickness}")
         if self.mesh_file is None:
             self.check_die()
@@ -143,6 +179,9 @@ class ExtrusionGeometry(_Strip):
     exit_thickness: float | None = None
     die_position: float | None = None
     mesh_file: str | None = None
+    symmetry: str = "plane_strain"
+    entry_diameter: float | None = None
+    exit_diameter: float | None = None
 
     @property
     def die_end(self) -> float:
@@ -177,6 +216,9 @@ class DrawingGeometry(_Strip):
     land_length: float | None = None
     die_entry: float | None = None
     mesh_file: str | None = None
+    symmetry: str = "plane_strain"
+    entry_diameter: float | None = None
+    exit_diameter: float | None = None
 
     def check_die(self) -> None:
         check_positive("geometry.die_entry", self.die_entry)
@@ -228,16 +270,22 @@ class Scales:
     flow_stress: float
 
 
+FRICTION_LAWS = ("coulomb", "factor")
+
+
 @dataclass
 class Friction:
-    """Coulomb friction on Gamma3 (2.9), regularised by d_T (3.11): absolute, or ``d_T_relative``
-    times the process velocity (default D_T_RELATIVE).
+    """Friction on Gamma3, regularised by d_T (3.11): absolute, or ``d_T_relative`` times the process
+    velocity (default D_T_RELATIVE). ``law``: "coulomb" (2.9), tau_f = mu * sigma_N-bar, or "factor",
+    tau_f = m k with k = sigma_p/sqrt(3) the workpiece's shear flow stress (0 <= m <= 1).
 
-    The bound tau_f = mu * sigma_N-bar uses the averaged (mollified) normal stress over
-    ``mollification_length`` (default: the mesh size), or the local penalty stress of (3.4).
+    Coulomb's bound uses the averaged (mollified) normal stress over ``mollification_length``
+    (default: the mesh size), or the local penalty stress of (3.4).
     """
 
+    law: str = "coulomb"
     mu: float = 0.0
+    m: float = 0.0
     d_T: float | None = None
     d_T_relative: float | None = None
     normal_stress: str = "averaged"
@@ -247,8 +295,16 @@ class Friction:
         set_pair("friction", self, "d_T", scales.velocity, D_T_RELATIVE)
 
     def check(self) -> None:
+        if self.law not in FRICTION_LAWS:
+            raise SceneError("friction.law", f"must be one of {', '.join(FRICTION_LAWS)}; got {self.law!r}")
         if not self.mu >= 0:
             raise SceneError("friction.mu", f"must be a finite number >= 0; got {self.mu}")
+        if not 0 <= self.m <= 1:
+            raise SceneError("friction.m", f"must lie in [0, 1] (the friction factor); got {self.m}")
+        unused = {"coulomb": ("m", self.m), "factor": ("mu", self.mu)}[self.law]
+        if unused[1] != 0:
+            raise SceneError(f"friction.{unused[0]}", f'does not apply to friction.law = "{self.law}" '
+                             f'({"mu" if self.law == "coulomb" else "m"} is its coefficient); leave it out')
         check_positive("friction.d_T", self.d_T)
         if self.normal_stress not in NORMAL_STRESSES:
             raise SceneError("friction.normal_stress",

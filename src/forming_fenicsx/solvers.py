@@ -6,7 +6,6 @@ Cholesky for the penalty formulation, LU for the mixed one, by default) and stop
 """
 from __future__ import annotations
 
-import itertools
 import logging
 import math
 import time
@@ -20,9 +19,9 @@ from petsc4py import PETSc
 from .compat import petsc_vec
 from .errors import LinearSolveError
 from .forms import FlowProblem
+from .petsc_options import PrefixedOptions
 
 log = logging.getLogger(__name__)
-_prefixes = itertools.count()
 ILL_CONDITIONED = 0.01  # a run warns when a linear solve's estimated error reaches this fraction of delta
 UNSOLVABLE = 10.0       # and stops at once when it reaches this multiple of delta
 
@@ -35,10 +34,11 @@ class LinearSolver:
     a form on the same space (hence the same sparsity): MUMPS' symbolic analysis is then done once for
     both, and one set of factors is held (Newton's operator after the secant start's matrix); its
     ``petsc_options`` and ``positive_definite`` are then those of that KSP and matrix, and the arguments
-    are not read."""
+    are not read. ``name``: the prefix of its PETSc options (petsc_options.py)."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any], bilinear: Any = None,
-                 linear: Any = None, matrix_of: LinearSolver | None = None, positive_definite: bool = False):
+                 linear: Any = None, matrix_of: LinearSolver | None = None, positive_definite: bool = False,
+                 name: str = "flow"):
         self.problem = problem
         self.positive_definite = matrix_of.positive_definite if matrix_of is not None else positive_definite
         self.a = bilinear if bilinear is not None else problem.a
@@ -49,14 +49,10 @@ class LinearSolver:
         else:
             self.A = dolfinx.fem.petsc.create_matrix(self.a)
             self.ksp = PETSc.KSP().create(problem.comm)
-            prefix = f"forming_{next(_prefixes)}_"
-            self.ksp.setOptionsPrefix(prefix)
-            options = PETSc.Options()
-            self._options = [prefix + key for key in petsc_options]  # removed by destroy
-            for key, value in petsc_options.items():
-                options[prefix + key] = value
+            self._options = PrefixedOptions(name, petsc_options)  # released by destroy
+            self.ksp.setOptionsPrefix(self._options.prefix)
             self.ksp.setFromOptions()
-            self.A.setOptionsPrefix(prefix)
+            self.A.setOptionsPrefix(self._options.prefix)
             self.A.setFromOptions()
             self.ksp.setOperators(self.A)
         self._residual = self.b.duplicate()
@@ -123,15 +119,12 @@ class LinearSolver:
         return self._correction.norm() / norm if norm > 0 else 0.0
 
     def destroy(self) -> None:
-        """Free the PETSc objects and the options set under this solver's prefix: PETSc's options
-        database holds 512 entries, and every run would otherwise leave its own there."""
+        """Free the PETSc objects and the options set under this solver's prefix."""
         owned = (self.ksp, self.A) if self._owner else ()
         for item in (*owned, self.b, self._residual, self._correction):
             item.destroy()
         if self._owner:
-            options = PETSc.Options()
-            for name in self._options:
-                options.delValue(name)
+            self._options.release()
 
 
 @dataclass
@@ -351,7 +344,7 @@ class SecantSolver:
         tolerance = self.settings.force_tolerance
         if tolerance == 0 or self.balance is None:
             return True
-        self.problem.update_state(self.problem.u, friction_too=True)
+        self.problem.update_state(self.problem.u, frozen_too=True)
         self._state_is_current = True  # the next inner iterate needs no update of its own
         residual = self.balance()
         result.force_balance_checks.append(residual)
@@ -416,25 +409,25 @@ class SecantSolver:
         result = SolveResult(converged=False, reason="")
         if not self._start(initial, result, start):
             return result
-        outer_limit = settings.max_outer_iterations if (method == "modified" and problem.has_friction) else 1
+        # the modified method's outer loop over the frozen coefficients (the friction bound, ...)
+        outer_limit = settings.max_outer_iterations if (method == "modified" and problem.frozen) else 1
         outer_increments: list[float] = []
         friction_note = (f"; at this friction coefficient the solution may not be unique{self._contact_note()}"
                          if problem.has_friction else "")
         for outer in range(outer_limit):
             result.outer_iterations = outer + 1
-            outer_start = problem.u.copy()
             if method == "modified":
-                problem.freeze_friction(problem.u)
+                problem.freeze(problem.u)
             increments: list[float] = []
             for inner in range(1, settings.max_iterations + 1):
                 if not self._state_is_current:
-                    problem.update_state(problem.u, friction_too=(method == "direct"))
+                    problem.update_state(problem.u, frozen_too=(method == "direct"))
                 self._state_is_current = False
                 increment = self._step(result, outer, inner, start)
                 increments.append(increment)
                 if self._must_stop(result, increments, outer, inner, friction_note):
                     return result
-                # with an outer (friction) loop, the force balance is checked when that loop converges
+                # with an outer loop, the force balance is checked when that loop converges
                 settled = self._contact_settled(increment, increments)
                 if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
                     break
@@ -444,12 +437,11 @@ class SecantSolver:
                 return result
             if outer_limit == 1:
                 break
-            change = petsc_vec(outer_start)
-            change.axpy(-1.0, petsc_vec(problem.u))
-            outer_increment = change.norm() / petsc_vec(problem.u).norm()
+            outer_increment = problem.frozen_change(problem.u)  # ||u0,m+1 - u0,m||/||u0,m+1||
             outer_increments.append(outer_increment)
             if problem.comm.rank == 0:
-                log.info("outer %d done: ||u0,m+1 - u0,m||/||u0,m+1|| = %.3e", outer, outer_increment)
+                log.info("outer %d done: frozen coefficients' change %.3e (%s)", outer, outer_increment,
+                         ", ".join(c.name for c in problem.frozen))
             if outer_increment < delta and self._balanced(result):
                 break
             if stalled(outer_increments, max(2, settings.stall_window // 5)):
