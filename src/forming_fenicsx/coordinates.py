@@ -99,6 +99,12 @@ class CoordinateSystem:
         return math.pi * half_thickness**2 if self.axisymmetric else half_thickness
 
     @property
+    def tensile_yield_factor(self) -> float:
+        """Yield stress in tension of the drawn product over the flow stress: 2/sqrt(3) in plane strain
+        (2k), 1 for a round bar."""
+        return 1.0 if self.axisymmetric else 2.0 / math.sqrt(3.0)
+
+    @property
     def separation_weight(self):
         """Weight on the y-traction on the die whose integral is the die separation force: the force
         on one die half per unit width, or (axisymmetric) the force that splits a die into two halves

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import SceneError
 from .scene import DrawingGeometry
 
 logger = logging.getLogger(__name__)
@@ -74,7 +75,11 @@ def strip_triangulation(geometry: DrawingGeometry, size_min: float, size_max: fl
     the local half-thickness, each quadrilateral cut into four triangles where its diagonals cross
     (a crossed-diagonal mesh, which does not lock under incompressibility). Returns the
     points, the triangles (vertex indices) and the boundary edges by role: free, die, symmetry, exit.
+    The bounds are those of plane strain: a round bar's (symmetry = "axisymmetric") are refused.
     """
+    if geometry.axisymmetric:
+        raise SceneError("geometry.symmetry", "the limit-analysis bounds are built for plane strain "
+                         '(triangles of the strip); not for symmetry = "axisymmetric"')
     h0, h1 = 0.5 * geometry.entry_thickness, 0.5 * geometry.exit_thickness
     xa = geometry.die_entry
     xb, xc, length = xa + geometry.cone_length, geometry.die_exit, geometry.length

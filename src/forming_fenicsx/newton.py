@@ -34,6 +34,7 @@ MAX_HALVINGS = 12   # smallest step 2**-12
 REFINEMENTS = 6     # energy evaluations that move a cut step towards the minimum of Phi along the direction
 BRACKET = 0.1       # ... until the bracket around it is this small relative to the step
 GOLDEN = 0.381966   # (3 - sqrt(5))/2: golden-section fraction
+ROUNDING = 1e-12    # a relative Newton step below this is rounding
 
 
 def parabola_vertex(a: float, fa: float, b: float, fb: float, c: float, fc: float) -> float | None:
@@ -298,7 +299,9 @@ class NewtonSolver(SecantSolver):
                 return result
             # a step the line search cut does not end the run: its short full step says little about the
             # distance to the answer when the energy along it is far from the Newton model
-            full = result.history[-1].step >= 1.0
+            # (a full step below ROUNDING of u changes Phi by less than its rounding: the line search
+            # cannot judge it, and the step is as good as taken)
+            full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
             if increment < settings.tolerance and settled and self._balanced(result):
                 result.converged, result.reason = True, "increment below tolerance"

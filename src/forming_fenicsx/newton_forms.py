@@ -133,6 +133,8 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     cap = material.secant_ufl(rate(u)) * rate(u)
     capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
     points = quadrature_points(problem.mesh, problem.full_degree)
+    # a factor that carries the mesh: a Newtonian law's G and G' are constants, which UFL gives no domain
+    on_mesh = dolfinx.fem.Constant(problem.mesh, 1.0)
     contact_set = None
     if problem.has_contact:
         node = ufl.TestFunction(function_space(problem.mesh, "P", scene.discretisation.degree))
@@ -141,6 +143,6 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     return NewtonForms(split_form(energy, apart), split_form(residual, apart),
                        dolfinx.fem.form(operator), operator, dual,
                        dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
-                       tangent, dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)), points),
+                       tangent, dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)) * on_mesh, points),
                        step, previous, contact_set)
 

@@ -29,10 +29,15 @@ def _integrate(problem: FlowProblem, integrand) -> float:
 
 
 def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
-    """Force the constraint on ``role`` exerts on the workpiece along its component: the residual summed
-    over the constrained dofs."""
-    residual = problem.residual.vector()
+    """Force the constraint on ``role`` exerts on the workpiece along its component."""
     component = next(c.component for c in problem.constraints if c.role == role)
+    return reaction_on(problem, role, component)
+
+
+def reaction_on(problem: FlowProblem, role: str, component: int) -> float:
+    """Force along x (0) or y (1) that the velocity prescribed on ``role`` exerts on the workpiece: the
+    residual summed over that component's dofs there (the whole body's when axisymmetric)."""
+    residual = problem.residual.vector()
     dofs = problem.boundary_dofs(role, component)
     owned = problem.V.dofmap.index_map.size_local * problem.V.dofmap.index_map_bs
     value = residual.getArray(readonly=True)[dofs[dofs < owned]].sum()
@@ -50,6 +55,21 @@ def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
         return normal, 0.0
     traction = friction.friction_traction(problem.friction_coefficient(), problem.u, n)
     return normal, _integrate(problem, -traction[0] * ds)
+
+
+def die_separation_force(problem: FlowProblem) -> float:
+    """The force that pushes the die apart: the y-traction of the workpiece on the die (contact pressure
+    p n_y plus the friction stress's y part) integrated over Gamma3 with the coordinate system's
+    separation weight: per unit width on one die half in plane strain; for a round die, the force
+    across a diametral plane, 2 int y t_y ds."""
+    if not problem.has_contact:
+        return 0.0
+    n, c = problem.n, problem.coordinates
+    traction_y = problem.contact_pressure(problem.u) * n[1]
+    if problem.has_friction:
+        traction_y -= friction.friction_traction(problem.friction_coefficient(), problem.u, n)[1]
+    plain = problem.ds.measure(ROLES["gamma3_contact"])
+    return _integrate(problem, traction_y * c.separation_weight * plain)
 
 
 def applied_force_x(problem: FlowProblem) -> float:
@@ -136,7 +156,8 @@ def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
     if profile is not None:
         pressed = profile["contact_pressure"] > 1e-9 * max(profile["contact_pressure"].max(), 1e-300)
         end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
-    return {"mean_die_pressure": q_av, "contact_length": _integrate(problem, touching * ds),
+    length = _integrate(problem, touching * problem.ds.measure(ROLES["gamma3_contact"]))
+    return {"mean_die_pressure": q_av, "contact_length": length,
             "contact_end_x": problem.comm.bcast(end, root=0)}
 
 
@@ -248,11 +269,14 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         process = {"ram_force": force, "ram_pressure": force / height,
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
     else:
-        process = {"drawing_force": force, "drawing_stress": force / problem.coordinates.section(problem.scene.geometry.thinnest),
+        stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
+        strength = problem.coordinates.tensile_yield_factor * problem.scene.reference_flow_stress
+        process = {"drawing_force": force, "drawing_stress": stress, "product_yield_ratio": stress / strength,
                    **drawing_scalars(problem)}
     return {
         **process,
         "die_force_x": die_normal + die_friction,
+        "die_separation_force": die_separation_force(problem),
         "die_normal_force_x": die_normal,
         "die_friction_force_x": die_friction,
         "applied_force_x": external,

@@ -82,8 +82,8 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding])
 
 
 def drawability(summary: dict[str, Any], scene: Scene) -> list[Finding]:
-    """The drawn product must leave the die rigid: its stress below its yield stress (2k = 2 sigma0/sqrt3
-    in plane strain), and its strain rate near zero after the die."""
+    """The drawn product must leave the die rigid: its stress below its yield stress in tension (2k =
+    2 sigma0/sqrt3 in plane strain, sigma0 for a round bar), and its strain rate near zero after the die."""
     found = []
     ratio = summary["exit_zone_rate_ratio"]
     if math.isfinite(ratio) and ratio > EXIT_ZONE_RIGID:
@@ -93,12 +93,11 @@ def drawability(summary: dict[str, Any], scene: Scene) -> list[Finding]:
                              f"{EXIT_ZONE_RIGID:g}). It yields under the load that pulls or pushes it: not a steady "
                              "process. Reduce the reduction, the die angle, the friction or the back force",
                              failure=True))
-    if scene.process.kind == "drawing":
-        strength = 2 / math.sqrt(3) * scene.reference_flow_stress
-        stress = summary["drawing_stress"]
-        finding = _graded("drawability", stress / strength, DRAWING_LIMIT,
-                          f"the drawing stress {stress:.4g} is {stress / strength:.3f} times the yield stress "
-                          f"2k = {strength:.4g} of the drawn strip (plane strain): ")
+    if "product_yield_ratio" in summary:
+        ratio, stress = summary["product_yield_ratio"], summary["drawing_stress"]
+        finding = _graded("drawability", ratio, DRAWING_LIMIT,
+                          f"the drawing stress {stress:.4g} is {ratio:.3f} times the yield stress in tension "
+                          f"of the drawn product ({'sigma0, a round bar' if scene.geometry.axisymmetric else '2k, a plane-strain strip'}): ")
         if finding is not None:
             tail = ("it yields after the die, so no steady drawing exists at this reduction and friction (not "
                     "drawable): reduce the reduction or the friction" if finding.failure else

@@ -26,6 +26,7 @@ DIMENSIONS = {
     "mean_die_pressure": "stress", "ram_force": "force_per_width", "drawing_force": "force_per_width",
     "die_force_x": "force_per_width", "die_normal_force_x": "force_per_width",
     "die_friction_force_x": "force_per_width", "applied_force_x": "force_per_width",
+    "die_separation_force": "force_per_width",
     "contact_length": "length", "contact_end_x": "length", "divergence_l2": "velocity",
     "s": "length", "x": "length", "y": "length", "contact_pressure": "stress",
     "averaged_normal_stress": "stress", "friction_stress": "stress", "velocity": "velocity",
@@ -88,10 +89,16 @@ class Units:
         """A CSV header: ``name [unit]`` for a quantity of DIMENSIONS when its unit is known, else ``name``."""
         return self.labelled(name, DIMENSIONS.get(name, ""))
 
-    def summary(self, keys: list[str]) -> dict[str, object]:
-        """What summary.json says of the units: the labels, and the unit of each reported quantity."""
+    def summary(self, keys: list[str], axisymmetric: bool = False) -> dict[str, object]:
+        """What summary.json says of the units: the labels, and the unit of each reported quantity
+        (forces of an axisymmetric model are the whole body's, not per unit width)."""
         if not self.given:
             return {"system": "not given: any consistent system ([units] names it; README, 'Units')"}
-        quantities = {key: self.label(DIMENSIONS[key]) for key in keys if key in DIMENSIONS}
+
+        def dimension(key: str) -> str:
+            found = DIMENSIONS[key]
+            return "force" if axisymmetric and found == "force_per_width" else found
+
+        quantities = {key: self.label(dimension(key)) for key in keys if key in DIMENSIONS}
         return {"length": self.length, "time": self.time, "stress": self.stress, "force": self.force,
                 "quantities": {key: unit for key, unit in quantities.items() if unit}}

@@ -15,6 +15,7 @@ from petsc4py import PETSc
 from .forms import FlowProblem
 from .geometry import FormingMesh
 from .scene import scene_from_dict
+from .newton import NewtonSolver
 from .solvers import SecantSolver
 
 LENGTH, HALF_HEIGHT, GRADIENT, A = 2.0, 1.0, 1.0, 1.0
@@ -64,3 +65,170 @@ def channel_orders(n: float, element: str, averaging: str, cells=(4, 8, 16)) -> 
     """Errors (rows: meshes; columns: L2, H1) and the observed orders between successive meshes."""
     errors = np.array([channel_errors(n, element, averaging, c) for c in cells])
     return errors, np.log2(errors[:-1] / errors[1:])
+
+
+# -- radial flows through a smooth cone (axisymmetric) or wedge (plane strain) ---------------------
+# Section 1 of the round-products reference: v = -(U/rho^2) e_rho (cone) or -(U/r) e_r (wedge) toward
+# the apex, for any flow law; the workpiece between the caps rho1 < rho < rho0, frictionless wall at
+# theta = alpha. Apex at the origin, flow along +x: x = -rho cos(theta), y = rho sin(theta).
+RADIAL = {"alpha": 15.0, "rho1": 1.0, "rho0": 1.5, "U": 1.0, "K": 1.0}
+
+
+def radial_power(symmetry: str) -> int:
+    """The power of 1/rho in the radial velocity: 2 for the cone, 1 for the wedge."""
+    return 2 if symmetry == "axisymmetric" else 1
+
+
+def radial_velocity(symmetry: str, x):
+    """The exact velocity -(U/rho^k) e_rho at the points x (UFL coordinates or a numpy (3, N) array)."""
+    power, U = radial_power(symmetry), RADIAL["U"]
+    rho = (x[0] ** 2 + x[1] ** 2) ** 0.5
+    # e_rho = (x, y)/rho points away from the apex (upstream); the flow runs toward it
+    return [-U / rho ** (power + 1) * x[0], -U / rho ** (power + 1) * x[1]]
+
+
+def radial_stress_rise(symmetry: str, n: float) -> float:
+    """sigma_rr(rho1) - sigma_rr(rho0) of the exact flow for the Norton law sigma = K rate^n.
+
+    Cone: rate = 2U/rho^3, d sigma_rr/d rho = -2 sigma/rho, so (2K/(3n)) (2U)^n (rho1^-3n - rho0^-3n).
+    Wedge: rate = (2/sqrt3) U/r^2, d sigma_rr/dr = -(2/sqrt3) sigma/r, so
+    (K/(sqrt3 n)) ((2/sqrt3) U)^n (r1^-2n - r0^-2n)."""
+    K, U, rho0, rho1 = RADIAL["K"], RADIAL["U"], RADIAL["rho0"], RADIAL["rho1"]
+    if symmetry == "axisymmetric":
+        return 2 * K / (3 * n) * (2 * U) ** n * (rho1 ** (-3 * n) - rho0 ** (-3 * n))
+    return K / (3**0.5 * n) * (2 / 3**0.5 * U) ** n * (rho1 ** (-2 * n) - rho0 ** (-2 * n))
+
+
+def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
+    """The sector rho1 < rho < rho0, 0 < theta < alpha in Gmsh (isoparametric Q_degree, ``cells``
+    elements across the angle, as many along rho): exit cap gamma1 (its velocity prescribed by the
+    caller), entry cap gamma2 (free), wall gamma3 (die), axis gamma6."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    from .msh import gmsh_session
+    from .roles import ROLES, WORKPIECE
+
+    alpha = np.radians(RADIAL["alpha"])
+    rho0, rho1 = RADIAL["rho0"], RADIAL["rho1"]
+    with gmsh_session():
+        if comm.rank == 0:
+            geo = gmsh.model.geo
+            centre = geo.addPoint(0, 0, 0)
+            corners = [geo.addPoint(-r * np.cos(t), r * np.sin(t), 0)
+                       for r, t in ((rho0, 0), (rho1, 0), (rho1, alpha), (rho0, alpha))]
+            axis = geo.addLine(corners[0], corners[1])
+            exit_cap = geo.addCircleArc(corners[1], centre, corners[2])
+            wall = geo.addLine(corners[2], corners[3])
+            entry_cap = geo.addCircleArc(corners[3], centre, corners[0])
+            surface = geo.addPlaneSurface([geo.addCurveLoop([axis, exit_cap, wall, entry_cap])])
+            along = max(1, round(cells * (rho0 - rho1) / (rho1 * alpha)))
+            for curve, count in ((axis, along), (wall, along), (exit_cap, cells), (entry_cap, cells)):
+                geo.mesh.setTransfiniteCurve(curve, count + 1)
+            geo.mesh.setTransfiniteSurface(surface)
+            geo.mesh.setRecombine(2, surface)
+            geo.synchronize()
+            gmsh.model.addPhysicalGroup(2, [surface], WORKPIECE)
+            for curve, role in ((exit_cap, "gamma1_velocity"), (entry_cap, "gamma2_free"),
+                                (wall, "gamma3_contact"), (axis, "gamma6_symmetry")):
+                gmsh.model.addPhysicalGroup(1, [curve], ROLES[role])
+            gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(degree)
+        mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+    roles = {role: ROLES[role] for role in ("gamma1_velocity", "gamma2_free", "gamma3_contact",
+                                           "gamma6_symmetry")}
+    return FormingMesh(mesh, facet_tags, roles, [])
+
+
+def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
+                comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, float]:
+    """Drawing through the smooth cone or wedge: the exit cap pulled at the exact velocity, the entry
+    cap free (the exact sigma_rr is taken zero there), the wall a frictionless die, the Norton law
+    sigma = K rate^n. Returns the L2 and H1-seminorm velocity errors (relative to the exact field's
+    norms) and the mean axial stress on the exit cap, F / (pi rho1^2 sin^2 alpha) (cone) or
+    F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise)."""
+    from .postprocess import reaction_on
+
+    forming_mesh = sector_mesh(cells, int(element[1]), comm)
+    scene = scene_from_dict({
+        "process": {"kind": "drawing", "velocity": RADIAL["U"]},
+        "output": {"fields": False, "figures": False},
+        "geometry": {"symmetry": symmetry, **({"entry_diameter": 2 * RADIAL["rho0"], "exit_diameter": 2}
+                                              if symmetry == "axisymmetric" else {})},
+        "material": {"law": "power", "A": RADIAL["K"], "n": n},
+        "discretisation": {"element": element, "averaging": "quadrature"},
+        "penalty": {"d_relative": 1e-7, "d_N_relative": 1e-4},  # O(d) below Q2's error on 16 cells
+        "solver": {"method": method, "tolerance": 1e-8, "max_iterations": 300,
+                   "reference_strain_rate": 2.0}})
+    problem = FlowProblem(scene, forming_mesh)
+    exit_velocity = dolfinx.fem.Function(problem.V)
+    exit_velocity.interpolate(lambda x: np.vstack(radial_velocity(symmetry, x)))
+    exit_facets = problem.role_facets("gamma1_velocity")
+    axis_dofs = problem.boundary_dofs("gamma6_symmetry", 1)
+    problem.bcs[:] = [dolfinx.fem.dirichletbc(exit_velocity, dolfinx.fem.locate_dofs_topological(
+        problem.V, 1, exit_facets)), dolfinx.fem.dirichletbc(PETSc.ScalarType(0), axis_dofs, problem.V.sub(1))]
+    solver = (NewtonSolver if method == "newton" else SecantSolver)(problem)
+    result = solver.solve()
+    solver.destroy()
+    if not result.converged:
+        raise RuntimeError(f"radial flow {symmetry} n = {n} {element} {cells} cells: {result.reason}")
+    x = ufl.SpatialCoordinate(problem.mesh)
+    exact = ufl.as_vector(radial_velocity(symmetry, x))
+    error = problem.u - exact
+    dx = problem.coordinates.measure(ufl.dx(domain=problem.mesh, metadata={"quadrature_degree": 8}))
+
+    def norm(integrand):
+        return float(np.sqrt(comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * dx)))))
+
+    alpha, rho1 = np.radians(RADIAL["alpha"]), RADIAL["rho1"]
+    area = problem.coordinates.section(rho1 * np.sin(alpha))
+    return {"l2": norm(ufl.inner(error, error)) / norm(ufl.inner(exact, exact)),
+            "h1": norm(ufl.inner(ufl.grad(error), ufl.grad(error))) / norm(ufl.inner(ufl.grad(exact),
+                                                                                   ufl.grad(exact))),
+            "exit_stress": reaction_on(problem, "gamma1_velocity", 0) / area,
+            "exact_exit_stress": radial_stress_rise(symmetry, n), "linear_solves": result.linear_solves}
+
+
+def homogeneous_extension(element: str, method: str, formulation: str = "penalty",
+                          comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, float]:
+    """A bar [0, 2] x [0, 1] (radius 1) pulled along its axis: u_x = 0 on x = 0, u_x = 2 rate0 on
+    x = 2, free lateral surface, Norton law sigma = K rate^n (n = 0.2). Exact: u = rate0 (x, -y/2),
+    sigma_xx = sigma(rate0), the other stresses zero. Returns the largest nodal velocity error over
+    rate0 and the end force over pi R^2 sigma(rate0). The penalty's solution differs by O(d)
+    (sigma_H = sigma/3 needs div u = d sigma/3, Theorem 3.1): d is 1e-6 rate0/sigma0 here."""
+    from .geometry import Constraint
+    from .postprocess import reaction
+
+    rate, n, length = 0.5, 0.2, 2.0
+    mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([length, 1.0])], [6, 3],
+                                         dolfinx.mesh.CellType.quadrilateral)
+    facets = {role: dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for role, where in (
+        ("gamma1_velocity", lambda x: np.isclose(x[0], length)), ("gamma2_free", lambda x: np.isclose(x[0], 0)),
+        ("gamma4_free", lambda x: np.isclose(x[1], 1.0)), ("gamma6_symmetry", lambda x: np.isclose(x[1], 0)))}
+    from .roles import ROLES
+
+    indices = np.concatenate(list(facets.values()))
+    values = np.concatenate([np.full(len(f), ROLES[role], dtype=np.int32) for role, f in facets.items()])
+    order = np.argsort(indices)
+    tags = dolfinx.mesh.meshtags(mesh, 1, indices[order].astype(np.int32), values[order])
+    constraints = [Constraint("gamma1_velocity", 0, rate * length), Constraint("gamma2_free", 0, 0.0),
+                   Constraint("gamma6_symmetry", 1, 0.0)]
+    scene = scene_from_dict({
+        "process": {"kind": "drawing", "velocity": rate * length}, "output": {"fields": False, "figures": False},
+        "geometry": {"symmetry": "axisymmetric"},
+        "material": {"law": "power", "A": RADIAL["K"], "n": n},
+        "discretisation": {"element": element, "formulation": formulation,
+                           "averaging": "quadrature" if method == "newton" else "nodes"},
+        "penalty": {"d_relative": 1e-6},
+        "solver": {"method": method, "tolerance": 1e-8, "reference_strain_rate": 0.1}})
+    problem = FlowProblem(scene, FormingMesh(mesh, tags, {role: ROLES[role] for role in facets}, constraints))
+    solver = (NewtonSolver if method == "newton" else SecantSolver)(problem)
+    result = solver.solve()
+    solver.destroy()
+    if not result.converged:
+        raise RuntimeError(f"homogeneous extension {element} {method}: {result.reason}")
+    points = problem.V.tabulate_dof_coordinates()
+    exact = np.column_stack([rate * points[:, 0], -rate * points[:, 1] / 2])
+    error = np.abs(problem.u.x.array.reshape(-1, 2) - exact).max() / rate
+    return {"velocity_error": comm.allreduce(error, op=MPI.MAX),
+            "force_ratio": reaction(problem) / (np.pi * RADIAL["K"] * rate**n), "solves": result.linear_solves}
