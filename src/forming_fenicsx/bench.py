@@ -35,15 +35,21 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     from mpi4py import MPI
 
     from .run import solve_scene
-    from .scene import load_scene
+    from .scene import read_scene_data, scene_from_dict
     from .study import exact_value
 
     scene_file, quantity, settings = EXAMPLES[case["example"]]
-    scene = load_scene(DEMOS / scene_file, [
+    data = read_scene_data(DEMOS / scene_file, [
         *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
         f"solver.method={case['method']}", f"discretisation.formulation={case.get('formulation', 'penalty')}",
         "solver.max_iterations=1000", "output.fields=false",
         "output.figures=false", *case.get("set", [])])
+    if case.get("symmetry") == "axisymmetric":  # the same mesh, as a round bar: thicknesses are diameters
+        geometry = data["geometry"]
+        geometry["symmetry"] = "axisymmetric"
+        for end in ("entry", "exit"):
+            geometry[f"{end}_diameter"] = geometry.pop(f"{end}_thickness")
+    scene = scene_from_dict(data)
     summary = solve_scene(scene)[2]
     comm = MPI.COMM_WORLD
     peak = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.SUM) / 1024.0
@@ -83,7 +89,8 @@ def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
 
 def _counterpart(rows: list[dict[str, Any]], row: dict[str, Any], **changed: Any) -> dict[str, Any] | None:
     """The row of the same case as ``row`` but for the ``changed`` keys (e.g. method="direct")."""
-    wanted = {key: row.get(key) for key in ("example", "mesh_size", "ranks", "method", "formulation")} | changed
+    keys = ("example", "mesh_size", "ranks", "method", "formulation", "symmetry")
+    wanted = {key: row.get(key) for key in keys} | changed
     return next((r for r in rows if all(r.get(key) == value for key, value in wanted.items())), None)
 
 
@@ -96,6 +103,9 @@ def compare(rows: list[dict[str, Any]]) -> None:
         row["speedup_vs_direct"] = direct["wall_time_s"] / row["wall_time_s"] if direct else None
         serial = _counterpart(rows, row, ranks=1)
         row["speedup_vs_1_rank"] = serial["wall_time_s"] / row["wall_time_s"] if serial else None
+        plane = _counterpart(rows, row, symmetry="plane_strain")
+        row["time_vs_plane_strain"] = (row["wall_time_s"] / plane["wall_time_s"]
+                                       if plane and row.get("symmetry") == "axisymmetric" else None)
 
 
 def _spread(times: list[float]) -> str:
@@ -107,17 +117,18 @@ def table(rows: list[dict[str, Any]]) -> str:
         return format(value, fmt) if value is not None else ""
 
     return markdown_table("forming bench", [
-        "example", "h", "ranks", "formulation", "method", "converged", "dofs", "linear solves", "wall s",
+        "example", "h", "ranks", "symmetry", "formulation", "method", "converged", "dofs", "linear solves", "wall s",
         "wall s range", "setup s", "assembly s", "factorisation s", "solve s", "rest s", "post s", "outside/inside per solve",
-        "peak MB", "solve error", "quantity", "error", "vs direct", "speed-up vs direct", "speed-up vs 1 rank"],
-        [[r["example"], r["mesh_size"], r["ranks"], r.get("formulation", "penalty"), r["method"], r["converged"],
+        "peak MB", "solve error", "quantity", "error", "vs direct", "speed-up vs direct", "speed-up vs 1 rank",
+        "time vs plane strain"],
+        [[r["example"], r["mesh_size"], r["ranks"], r.get("symmetry", "plane_strain"), r.get("formulation", "penalty"), r["method"], r["converged"],
           r["dofs"], r["linear_solves"], f"{r['wall_time_s']:.2f}",
           _spread(r.get("wall_time_runs_s", [r["wall_time_s"]])), f"{r['setup_s']:.2f}", f"{r['assembly_s']:.2f}",
           f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}", f"{r['rest_s']:.2f}",
           f"{r.get('postprocess_s', 0.0):.2f}", f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}",
           f"{r['peak_memory_mb']:.0f}", number(r.get("solve_error_estimate"), ".1e"), f"{r['value']:.6g}",
           number(r["error"], ".2e"), number(r["vs_direct"], ".1e"), number(r["speedup_vs_direct"], ".2f"),
-          number(r["speedup_vs_1_rank"], ".2f")] for r in rows])
+          number(r["speedup_vs_1_rank"], ".2f"), number(r.get("time_vs_plane_strain"), ".2f")] for r in rows])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,6 +139,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
     parser.add_argument("--formulations", nargs="+", default=["penalty"], choices=["penalty", "mixed"],
                         help="incompressibility by penalty and/or the mixed formulation")
+    parser.add_argument("--symmetries", nargs="+", default=["plane_strain"],
+                        choices=["plane_strain", "axisymmetric"],
+                        help="the examples as strips and/or round bars (thicknesses read as diameters)")
     parser.add_argument("--ranks", type=int, nargs="+", default=[1], help="MPI ranks of each case (e.g. 1 2)")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                         help="override a scene value in every case")
@@ -149,14 +163,16 @@ def main(argv: list[str] | None = None) -> int:
         print("forming bench: run it without mpirun; --ranks sets the ranks of each case", file=sys.stderr)
         return 2
     cases = [({"example": example, "mesh_size": size, "method": method, "formulation": formulation,
-               "set": args.set}, ranks)
+               "symmetry": symmetry, "set": args.set}, ranks)
              for example in args.examples for size in args.sizes or DEFAULT_SIZES[example]
-             for ranks in args.ranks for formulation in args.formulations for method in args.methods]
+             for ranks in args.ranks for formulation in args.formulations for method in args.methods
+             for symmetry in args.symmetries]
     runs: list[list[dict[str, Any]]] = [[] for _ in cases]
     for round_ in range(1, args.repeat + 1):  # every case once per round: a slow spell of the machine
         for (case, ranks), case_runs in zip(cases, runs, strict=True):  # falls on all cases alike
             case_runs.append(_launch(case, ranks))
-            print(f"run {round_}/{args.repeat}: example {case['example']}, h = {case['mesh_size']}, {ranks} rank(s), "
+            print(f"run {round_}/{args.repeat}: example {case['example']}, {case['symmetry']}, "
+                  f"h = {case['mesh_size']}, {ranks} rank(s), "
                   f"{case['formulation']}, {case['method']}: {case_runs[-1]['linear_solves']} solves, "
                   f"{case_runs[-1]['wall_time_s']:.2f} s", flush=True)
     rows = [median_run(case_runs) for case_runs in runs]

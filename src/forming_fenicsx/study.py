@@ -78,9 +78,11 @@ def exact_value(scene, quantity: str) -> float | None:
     """The exact value of ``quantity`` where a slip-line field is exact (verification.md):
     - frictionless square-die extrusion at reduction 1/2: Hill's ram pressure (1 + pi/2) k;
     - frictionless drawing without back tension at r = 2 sin(a)/(1 + 2 sin(a)) for the die semi-angle
-      a: one triangle and a centred fan, q = 2k(1 + a)(1 - r), drawing stress 2k(1 + a) r."""
+      a: one triangle and a centred fan, q = 2k(1 + a)(1 - r), drawing stress 2k(1 + a) r.
+    Both are plane-strain fields: a round bar (symmetry = "axisymmetric") has none."""
     geometry, process = scene.geometry, scene.process
-    if scene.friction.mu != 0 or process.applied_force is not None or geometry.mesh_file is not None:
+    rough = scene.friction.mu != 0 or scene.friction.m != 0
+    if rough or process.applied_force is not None or geometry.mesh_file is not None or geometry.axisymmetric:
         return None
     k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
     if (process.kind == "extrusion" and quantity == "ram_pressure"
