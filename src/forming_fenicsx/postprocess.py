@@ -16,6 +16,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import contact, friction
+from .closed_forms import central_burst_indicator
 from .compat import function_space, geometry_degree
 from .forms import FlowProblem
 from .geometry import die_coordinate
@@ -161,6 +162,18 @@ def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
             "contact_end_x": problem.comm.bcast(end, root=0)}
 
 
+def pass_shape(problem: FlowProblem) -> dict[str, float]:
+    """The reduction r (of area for a round bar, of thickness for a strip) and the central-burst
+    indicator Delta of a conical die (closed_forms.central_burst_indicator); none for a user's mesh."""
+    g = problem.scene.geometry
+    if g.mesh_file is not None:
+        return {}
+    ratio = g.exit_thickness / g.entry_thickness
+    reduction = 1 - (ratio**2 if g.axisymmetric else ratio)
+    return {"reduction": reduction,
+            "central_burst_indicator": central_burst_indicator(reduction, g.die_angle, g.axisymmetric)}
+
+
 def free_surface_crossing(problem: FlowProblem) -> float:
     """Volume crossing the free strip surfaces (Gamma2, Gamma4 facets whose normal is mostly along y),
     in or out, relative to the flux through Gamma1: zero for a steady state whose free surfaces are
@@ -272,7 +285,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
         strength = problem.coordinates.tensile_yield_factor * problem.scene.reference_flow_stress
         process = {"drawing_force": force, "drawing_stress": stress, "product_yield_ratio": stress / strength,
-                   **drawing_scalars(problem)}
+                   **drawing_scalars(problem), **pass_shape(problem)}
     return {
         **process,
         "die_force_x": die_normal + die_friction,
