@@ -30,7 +30,7 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
                                "1.0", "--methods", "direct", "newton", "--repeat", "2", "--out", str(out)],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
-        assert "| example | h | ranks | formulation | method | converged |" in done.stdout
+        assert "| example | h | ranks | symmetry | formulation | method | converged |" in done.stdout
         order = [(line.split(":")[0], line.split(", ")[-2].split(":")[0]) for line in done.stdout.splitlines()
                  if line.startswith("run ")]  # rounds: every case once, then again
         assert order == [("run 1/2", "direct"), ("run 1/2", "newton"), ("run 2/2", "direct"), ("run 2/2", "newton")]
@@ -55,3 +55,10 @@ def test_compare_against_direct_and_one_rank():
     assert abs(rows[1]["vs_direct"] - 1e-3) < 1e-12
     assert rows[1]["speedup_vs_direct"] == 4.0 and rows[2]["speedup_vs_1_rank"] == 2.0
     assert abs(rows[0]["error"] - 0.1) < 1e-12 and rows[2]["vs_direct"] is None
+
+
+def test_compare_axisymmetric_against_plane_strain():
+    rows = [{"example": 2, "mesh_size": 0.05, "method": "newton", "ranks": 1, "symmetry": s, "value": 1.0,
+             "exact": None, "wall_time_s": t} for s, t in (("plane_strain", 2.0), ("axisymmetric", 2.5))]
+    compare(rows)
+    assert rows[1]["time_vs_plane_strain"] == 1.25 and rows[0]["time_vs_plane_strain"] is None
