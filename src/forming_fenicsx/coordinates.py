@@ -18,6 +18,12 @@ import ufl
 SYMMETRIES = ("plane_strain", "axisymmetric")
 
 
+def tensile_yield_factor(axisymmetric: bool) -> float:
+    """Yield stress in tension of a drawn product over the flow stress: 2/sqrt(3) in plane strain
+    (2k), 1 for a round bar."""
+    return 1.0 if axisymmetric else 2.0 / math.sqrt(3.0)
+
+
 class WeightedMeasure:
     """A UFL measure whose integrands are multiplied by a weight: ``f * measure`` is int f w dx.
 
@@ -100,9 +106,7 @@ class CoordinateSystem:
 
     @property
     def tensile_yield_factor(self) -> float:
-        """Yield stress in tension of the drawn product over the flow stress: 2/sqrt(3) in plane strain
-        (2k), 1 for a round bar."""
-        return 1.0 if self.axisymmetric else 2.0 / math.sqrt(3.0)
+        return tensile_yield_factor(self.axisymmetric)
 
     @property
     def separation_weight(self):

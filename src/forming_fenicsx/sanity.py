@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from .coordinates import tensile_yield_factor
 from .scene import D_N_RELATIVE, D_RELATIVE, Scene
 from .solvers import ILL_CONDITIONED
 
@@ -93,8 +94,9 @@ def drawability(summary: dict[str, Any], scene: Scene) -> list[Finding]:
                              f"{EXIT_ZONE_RIGID:g}). It yields under the load that pulls or pushes it: not a steady "
                              "process. Reduce the reduction, the die angle, the friction or the back force",
                              failure=True))
-    if "product_yield_ratio" in summary:
-        ratio, stress = summary["product_yield_ratio"], summary["drawing_stress"]
+    if scene.process.kind == "drawing":
+        stress = summary["drawing_stress"]
+        ratio = stress / (tensile_yield_factor(scene.geometry.axisymmetric) * scene.reference_flow_stress)
         finding = _graded("drawability", ratio, DRAWING_LIMIT,
                           f"the drawing stress {stress:.4g} is {ratio:.3f} times the yield stress in tension "
                           f"of the drawn product ({'sigma0, a round bar' if scene.geometry.axisymmetric else '2k, a plane-strain strip'}): ")
