@@ -1,6 +1,7 @@
 """Values with units given absolute or relative to one of the scene's scales (scene.Scales)."""
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from .errors import SceneError
@@ -22,6 +23,9 @@ def resolve_pair(section: str, table: Any, key: str, scale: float, default: floa
     check_positive(f"{name}_relative", relative)
     if absolute is None:
         absolute = (default if relative is None else relative) * scale
+    if not (math.isfinite(scale) and math.isfinite(absolute) and absolute > 0):
+        raise SceneError(name, f"its scale {scale:g} (from the scene's velocity, size and flow stress) makes it "
+                         f"{absolute:g}: give {name} or check the material's flow stress and the process data")
     return absolute, absolute / scale
 
 
