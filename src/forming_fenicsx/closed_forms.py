@@ -1,50 +1,158 @@
-"""Closed-form drawing and extrusion loads through conical dies, for orientation and verification
-(round-products reference, sections 2 and 5). Angles in degrees; r = 1 - A1/A0 the reduction (of area
-for a round bar, of thickness for a strip)."""
+"""Closed-form and semi-analytic drawing and extrusion loads through conical and wedge dies, for
+orientation and verification (round-products reference, sections 1, 2 and 5).
+
+Angles are in degrees at the API (radians inside); r = 1 - A1/A0 is the reduction (of area for a
+round bar, of thickness for a strip). Stresses are dimensionless: over the flow stress sigma0 (or
+Ybar) of a round bar, over 2k = 2 sigma0/sqrt3 of a strip, unless a function takes K.
+"""
 from __future__ import annotations
 
 import math
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+SYMMETRIES = ("axisymmetric", "plane_strain")
+SQRT3 = math.sqrt(3.0)
 
 
-def sachs_drawing_stress(reduction: float, semi_angle: float, mu: float, back_tension: float = 0.0) -> float:
-    """Sachs' slab method with Coulomb friction (Dieter, Mechanical Metallurgy): sigma_d / Y =
-    ((1 + B)/B)(1 - (A1/A0)^B) + (sigma_b/Y)(A1/A0)^B, B = mu cot(alpha), Y the mean flow stress of a
-    round bar (2k for a strip, thicknesses for areas); mu -> 0 gives ln(A0/A1) + sigma_b/Y."""
-    ratio = 1.0 - reduction
+def _is_axisymmetric(symmetry: str) -> bool:
+    """True for "axisymmetric", False for "plane_strain"; anything else is refused."""
+    if symmetry not in SYMMETRIES:
+        raise ValueError(f"symmetry must be one of {SYMMETRIES}; got {symmetry!r}")
+    return symmetry == "axisymmetric"
+
+
+def _expm1_over(x: float) -> float:
+    """(e^x - 1)/x, 1 at x = 0 (no cancellation for small x)."""
+    return math.expm1(x) / x if x != 0.0 else 1.0
+
+
+def _gauss_legendre(fun: Callable[[np.ndarray], np.ndarray], a: float, b: float,
+                    nodes: int = 24) -> float:
+    """Gauss-Legendre quadrature of a smooth integrand on [a, b]."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    return float(0.5 * (b - a) * np.dot(w, fun(0.5 * (b - a) * x + 0.5 * (a + b))))
+
+
+def _root(fun: Callable[[float], float], lower: float, upper: float, tol: float = 1e-13) -> float:
+    """A root of fun in a bracket [lower, upper] (signs differ) by the Illinois false position."""
+    f_lower, f_upper = fun(lower), fun(upper)
+    if f_lower * f_upper > 0:
+        raise ValueError(f"no sign change on [{lower}, {upper}]")
+    side = 0
+    x = lower
+    for _ in range(200):
+        x = (lower * f_upper - upper * f_lower) / (f_upper - f_lower)
+        fx = fun(x)
+        if fx == 0.0 or upper - lower < tol * (1.0 + abs(x)):
+            return x
+        if fx * f_upper > 0:
+            upper, f_upper = x, fx
+            if side == -1:
+                f_lower /= 2
+            side = -1
+        else:
+            lower, f_lower = x, fx
+            if side == 1:
+                f_upper /= 2
+            side = 1
+    return x
+
+
+def _bracket_decreasing(fun: Callable[[float], float], guess: float) -> tuple[float, float]:
+    """(lower, upper) with fun(lower) > 0 > fun(upper), for fun decreasing on (1, inf), from a
+    guess of the root."""
+    upper = guess
+    while fun(upper) > 0:
+        upper = 1 + 2 * (upper - 1)
+    lower = 1 + 0.5 * (upper - 1)
+    while fun(lower) < 0:
+        lower = 1 + 0.5 * (lower - 1)
+    return lower, upper
+
+
+# --- Section 2: slab method and upper bounds ------------------------------------------------------
+
+def sachs_drawing_stress(reduction: float, semi_angle: float, mu: float,
+                         symmetry: str = "axisymmetric", back_tension: float = 0.0) -> float:
+    """Sachs' slab method with Coulomb friction (Dieter, Mechanical Metallurgy, wire and strip
+    drawing): sigma_d/Ybar = ((1 + B)/B)(1 - (A1/A0)^B) + (sigma_b/Ybar)(A1/A0)^B, B = mu cot alpha.
+
+    "axisymmetric": sigma_d/Ybar of a round bar (areas); "plane_strain": sigma_d/(2k) of a strip
+    (thicknesses), the same expression. Written as (1 + B) L (e^(BL) - 1)/(BL) e^(-BL),
+    L = ln(A0/A1), so mu = 0 gives ln(A0/A1) + sigma_b/Ybar exactly.
+    """
+    _is_axisymmetric(symmetry)
+    log_ratio = -math.log1p(-reduction)
     b = mu / math.tan(math.radians(semi_angle))
-    if b < 1e-12:
-        return -math.log(ratio) + back_tension
-    return (1 + b) / b * (1 - ratio**b) + back_tension * ratio**b
+    decay = math.exp(-b * log_ratio)  # (A1/A0)^B
+    return (1 + b) * log_ratio * _expm1_over(b * log_ratio) * decay + back_tension * decay
 
 
 def avitzur_f(alpha: float) -> float:
-    """Avitzur's f(alpha) of the internal power of the spherical velocity field (alpha in radians)."""
+    """Avitzur's f(alpha) (alpha in radians), the internal power of his cone-zone field
+    v = -v0 R0^2 cos(theta)/rho^2 per sigma0 ln(A0/A1) (Avitzur 1963):
+    f = [1 - cos a sqrt(1 - (11/12) sin^2 a)
+         + ln((1 + sqrt(11/12))/(sqrt(11/12) cos a + sqrt(1 - (11/12) sin^2 a)))/sqrt132]
+        / sin^2 a."""
     s2 = math.sin(alpha) ** 2
     q = math.sqrt(1 - 11 / 12 * s2)
     return (1 - math.cos(alpha) * q + 1 / math.sqrt(132) * math.log(
         (1 + math.sqrt(11 / 12)) / (math.sqrt(11 / 12) * math.cos(alpha) + q))) / s2
 
 
-def avitzur_drawing_stress(reduction: float, semi_angle: float, m: float, land: float = 0.0,
-                           back_tension: float = 0.0) -> float:
-    """Avitzur's upper bound for wire drawing (and conical-die extrusion) with a friction factor m
-    (tau = m sigma0/sqrt3; J. Eng. Ind. 85 (1963) 89): sigma_xf/sigma0 = sigma_xb/sigma0
-    + 2 f(alpha) ln(R0/Rf) + (2/sqrt3)[alpha/sin^2 alpha - cot alpha] + (2/sqrt3) m [cot alpha
-    ln(R0/Rf) + L/Rf], ``land`` = L/Rf."""
+def avitzur_cone_factor(semi_angle: float, m: float) -> float:
+    """The factor of sigma0 ln(A0/A1) in Avitzur's bound (Avitzur 1963):
+    f(alpha) + m cot(alpha)/sqrt3, the cone zone's internal power plus the die friction
+    tau = m sigma0/sqrt3."""
     alpha = math.radians(semi_angle)
-    log_ratio = -0.5 * math.log(1.0 - reduction)  # ln(R0/Rf)
-    shear = 2 / math.sqrt(3) * (alpha / math.sin(alpha) ** 2 - 1 / math.tan(alpha))
-    return (back_tension + 2 * avitzur_f(alpha) * log_ratio + shear
-            + 2 / math.sqrt(3) * m * (log_ratio / math.tan(alpha) + land))
+    return avitzur_f(alpha) + m / (SQRT3 * math.tan(alpha))
 
 
-def avitzur_optimum_angle(reduction: float, m: float, land: float = 0.0) -> float:
-    """The semi-angle (degrees) minimising avitzur_drawing_stress: golden-section search on [0.5, 45]."""
+def avitzur_drawing_stress(reduction: float, semi_angle: float, m: float,
+                           land_over_exit_radius: float = 0.0, back_tension: float = 0.0) -> float:
+    """Avitzur's upper bound for wire drawing and conical-die extrusion with a friction factor m
+    (J. Eng. Ind. 85 (1963) 89): sigma_xf/sigma0 = sigma_xb/sigma0 + 2 f(alpha) ln(R0/Rf)
+    + (2/sqrt3)[alpha/sin^2 alpha - cot alpha] + (2/sqrt3) m [cot alpha ln(R0/Rf) + L/Rf]."""
+    alpha = math.radians(semi_angle)
+    shear = 2 / SQRT3 * (alpha / math.sin(alpha) ** 2 - 1 / math.tan(alpha))
+    return (back_tension + avitzur_cone_factor(semi_angle, m) * -math.log1p(-reduction) + shear
+            + 2 / SQRT3 * m * land_over_exit_radius)
+
+
+def upper_bound_wedge_factor(semi_angle: float, m: float) -> float:
+    """Plane-strain analogue of avitzur_cone_factor, derived here with Avitzur's method (field
+    v_r = -v0 r0 cos(theta)/r between circular arcs), the factor of 2k ln(h0/h1):
+    E(alpha | 3/4)/sin(alpha) + (m/2) cot(alpha), E(a | 3/4) = int_0^a sqrt(1 - (3/4) sin^2 t) dt.
+    """
+    alpha = math.radians(semi_angle)
+    elliptic = _gauss_legendre(lambda t: np.sqrt(1 - 0.75 * np.sin(t) ** 2), 0.0, alpha)
+    return elliptic / math.sin(alpha) + 0.5 * m / math.tan(alpha)
+
+
+def upper_bound_strip_drawing_stress(reduction: float, semi_angle: float, m: float,
+                                     land_over_exit_half_thickness: float = 0.0,
+                                     back_tension: float = 0.0) -> float:
+    """Upper bound for strip drawing through a wedge die (sigma/2k), derived here with Avitzur's
+    method (not a printed formula): sigma_xf/2k = sigma_xb/2k + upper_bound_wedge_factor ln(h0/hf)
+    + tan(alpha/2) (shear on the entry and exit arcs) + (m/2) L/(hf/2) (land of length L)."""
+    alpha = math.radians(semi_angle)
+    return (back_tension + upper_bound_wedge_factor(semi_angle, m) * -math.log1p(-reduction)
+            + math.tan(alpha / 2) + 0.5 * m * land_over_exit_half_thickness)
+
+
+def avitzur_optimum_angle(reduction: float, m: float, land_over_exit_radius: float = 0.0) -> float:
+    """The semi-angle (degrees) minimising avitzur_drawing_stress: golden section on [0.5, 45]."""
     lower, upper = 0.5, 45.0
     golden = (math.sqrt(5) - 1) / 2
+
+    def stress(angle: float) -> float:
+        return avitzur_drawing_stress(reduction, angle, m, land_over_exit_radius)
+
     for _ in range(80):
         a, b = upper - golden * (upper - lower), lower + golden * (upper - lower)
-        if avitzur_drawing_stress(reduction, a, m, land) < avitzur_drawing_stress(reduction, b, m, land):
+        if stress(a) < stress(b):
             upper = b
         else:
             lower = a
@@ -53,14 +161,162 @@ def avitzur_optimum_angle(reduction: float, m: float, land: float = 0.0) -> floa
 
 def avitzur_optimum_angle_approx(reduction: float, m: float) -> float:
     """Avitzur's approximation alpha_opt = sqrt(1.5 m ln(R0/Rf)) (radians), in degrees."""
-    return math.degrees(math.sqrt(1.5 * m * -0.5 * math.log(1.0 - reduction)))
+    return math.degrees(math.sqrt(1.5 * m * -0.5 * math.log1p(-reduction)))
 
 
-def central_burst_indicator(reduction: float, semi_angle: float, axisymmetric: bool) -> float:
-    """Delta = mean thickness / contact length of the pass: (alpha/r)(1 + sqrt(1 - r))^2 for a round
-    bar, (alpha/r)(2 - r) for a strip (alpha in radians); large Delta (small reductions through wide
-    dies) favours central bursts and redundant work."""
+# --- Section 2: Shield's cone flow and Nadai's wedge flow (rigid-perfectly plastic, friction m) ---
+
+class RadialFlow(NamedTuple):
+    """A radial flow v = -U f(theta)/rho^2 (cone) or -Q f(theta)/r (wedge) with f(0) = 1.
+
+    factor: the rise of the mean axial stress per sigma0 ln(A0/A1) (cone, Shield's c/2) or per
+    2k ln(h0/h1) (wedge, Hill's c); theta, shear = sin psi = tau/k, speed = f, on a grid of psi
+    (of theta when m = 0).
+    """
+
+    factor: float
+    theta: np.ndarray
+    shear: np.ndarray
+    speed: np.ndarray
+
+
+def _radial_flow_integrate(factor: float, psi_wall: float, cone: bool, steps: int
+                           ) -> tuple[list[float], list[float]]:
+    """theta(psi) and ln f(psi) on psi_i = i psi_wall/steps by RK4, for a given factor lambda.
+
+    With S = sin psi = tau/k, the von Mises flow rule and equilibrium give (kappa = sqrt3, j = 1 for
+    the cone, Shield 1955; kappa = 1, j = 0 for the wedge, Hill ch. VIII)
+        dS/dtheta + j S cot(theta) = 2 kappa (lambda - cos psi),  d ln f/dtheta = -2 kappa tan psi,
+    integrated in psi (regular up to a sticking wall psi = pi/2): dtheta/dpsi = cos psi / S',
+    d ln f/dpsi = -2 kappa sin psi / S'. At theta = 0 the series S = a theta + b theta^3,
+    a = 2 kappa (lambda - 1)/(1 + j), b = (kappa a^2 + j a/3)/(3 + j), starts the cone's singular
+    point. A run that leaves 0 < theta < pi/2 or S' > 0 is cut short (theta_end = pi/2).
+    """
+    kappa, j = (SQRT3, 1.0) if cone else (1.0, 0.0)
+    a = 2 * kappa * (factor - 1) / (1 + j)
+    b = (kappa * a**2 + j * a / 3) / (3 + j)
+    h = psi_wall / steps
+
+    def rhs(psi: float, theta: float) -> tuple[float, float]:
+        if not 0 < theta < math.pi / 2:
+            raise ArithmeticError
+        slope = 2 * kappa * (factor - math.cos(psi)) - j * math.sin(psi) / math.tan(theta)
+        if not slope > 0:
+            raise ArithmeticError
+        return math.cos(psi) / slope, -2 * kappa * math.sin(psi) / slope
+
+    theta, log_f = [0.0, h / a - (1 / (6 * a) + b / a**4) * h**3], [0.0, -kappa * h**2 / a]
+    try:
+        for i in range(1, steps):
+            psi, t, g = i * h, theta[-1], log_f[-1]
+            k1 = rhs(psi, t)
+            k2 = rhs(psi + h / 2, t + h / 2 * k1[0])
+            k3 = rhs(psi + h / 2, t + h / 2 * k2[0])
+            k4 = rhs(psi + h, t + h * k3[0])
+            theta.append(t + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]))
+            log_f.append(g + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]))
+    except ArithmeticError:
+        theta.append(math.pi / 2)
+    return theta, log_f
+
+
+def radial_flow(semi_angle: float, m: float, symmetry: str, steps: int = 400) -> RadialFlow:
+    """Shield's cone flow ("axisymmetric", J. Mech. Phys. Solids 3 (1955)) or Nadai's wedge flow
+    ("plane_strain", Hill ch. VIII) of a rigid-perfectly plastic von Mises material between walls
+    with friction factor m (tau = m k), by shooting on the eigenvalue lambda:
+    S(0) = 0, S(alpha) = m for the equations of _radial_flow_integrate (with lambda = c/2 the
+    cone's is the reference's dS/dtheta + S cot theta = sqrt3 c - 2 sqrt3 sqrt(1 - S^2)); the mean
+    axial stress rises by lambda sigma0 ln(A0/A1) (cone) or lambda 2k ln(h0/h1) (wedge).
+    """
+    cone = _is_axisymmetric(symmetry)
     alpha = math.radians(semi_angle)
-    if axisymmetric:
+    if not (0 < alpha < math.pi / 2 and 0 <= m <= 1):
+        raise ValueError(f"need 0 < semi_angle < 90 and 0 <= m <= 1; got {semi_angle}, {m}")
+    psi_wall = math.asin(m)
+    if psi_wall == 0.0:
+        grid = np.linspace(0.0, alpha, steps + 1)
+        return RadialFlow(1.0, grid, np.zeros_like(grid), np.ones_like(grid))
+
+    def miss(factor: float) -> float:
+        return _radial_flow_integrate(factor, psi_wall, cone, steps)[0][-1] - alpha
+
+    kappa, j = (SQRT3, 1.0) if cone else (1.0, 0.0)
+    factor = _root(miss, *_bracket_decreasing(miss, 1 + (1 + j) * m / (2 * kappa * alpha)))
+    theta, log_f = _radial_flow_integrate(factor, psi_wall, cone, steps)
+    return RadialFlow(factor, np.array(theta), np.sin(np.linspace(0.0, psi_wall, steps + 1)),
+                      np.exp(log_f))
+
+
+def shield_cone_factor(semi_angle: float, m: float) -> float:
+    """c/2 of Shield's cone flow (radial_flow, axisymmetric): the cone zone's mean axial stress
+    rises by (c/2) sigma0 ln(A0/A1); 1 for m = 0 (homogeneous radial flow)."""
+    return radial_flow(semi_angle, m, "axisymmetric").factor
+
+
+def nadai_wedge_factor(semi_angle: float, m: float) -> float:
+    """Nadai's wedge flow in closed form (Hill, The Mathematical Theory of Plasticity, ch. VIII):
+    tau = k sin 2psi, theta = -psi + c/sqrt(c^2 - 1) arctan(sqrt((c + 1)/(c - 1)) tan psi), c from
+    theta = alpha at the wall sin 2psi = m; the mean axial stress rises by c 2k ln(h0/h1)."""
+    alpha = math.radians(semi_angle)
+    psi = 0.5 * math.asin(m)
+    if psi == 0.0:
+        return 1.0
+
+    def miss(c: float) -> float:
+        root = math.sqrt(c * c - 1)
+        return -psi + c / root * math.atan(math.sqrt((c + 1) / (c - 1)) * math.tan(psi)) - alpha
+
+    return _root(miss, *_bracket_decreasing(miss, 1 + m / alpha))
+
+
+# --- Section 5: central burst --------------------------------------------------------------------
+
+def central_burst_indicator(reduction: float, semi_angle: float, symmetry: str) -> float:
+    """Delta = mean thickness / contact length of the pass: (alpha/r)(1 + sqrt(1 - r))^2 for a round
+    bar ("axisymmetric"), (alpha/r)(2 - r) for a strip ("plane_strain"), alpha in radians; large
+    Delta (small reductions through wide dies) favours central bursts and redundant work."""
+    alpha = math.radians(semi_angle)
+    if _is_axisymmetric(symmetry):
         return alpha / reduction * (1 + math.sqrt(1 - reduction)) ** 2
     return alpha / reduction * (2 - reduction)
+
+
+# --- Section 1: exact radial flows through smooth dies -------------------------------------------
+
+def radial_flow_strain(r0: float, r1: float, symmetry: str) -> float:
+    """Equivalent strain gained from radius r0 to r1 in the smooth-die radial flow: 2 ln(r0/r1)
+    = ln(A0/A1) in the cone, (2/sqrt3) ln(r0/r1) in the wedge."""
+    return (2.0 if _is_axisymmetric(symmetry) else 2 / SQRT3) * math.log(r0 / r1)
+
+
+def radial_flow_stress_rise(r0: float, r1: float, K: float, n: float, flux: float,
+                            symmetry: str) -> float:
+    """sigma_rr(r1) - sigma_rr(r0) of the smooth-die radial flow of a Norton law sigma = K rate^n.
+
+    Cone, v = -(U/rho^2) e_rho, flux = U, rate = 2U/rho^3, d sigma_rr/d rho = -2 sigma/rho:
+    (2K/(3n)) (2U)^n (r1^(-3n) - r0^(-3n)). Wedge, v = -(Q/r) e_r, flux = Q, rate = (2/sqrt3) Q/r^2,
+    d sigma_rr/dr = -(2/sqrt3) sigma/r: (K/(sqrt3 n)) (2Q/sqrt3)^n (r1^(-2n) - r0^(-2n)).
+    Both written with (e^x - 1)/x, so n = 0 gives K ln(A0/A1) and 2 (K/sqrt3) ln(r0/r1) exactly.
+    """
+    log_ratio = math.log(r0 / r1)
+    if _is_axisymmetric(symmetry):
+        return 2 * K * (2 * flux / r0**3) ** n * log_ratio * _expm1_over(3 * n * log_ratio)
+    return 2 / SQRT3 * K * (2 / SQRT3 * flux / r0**2) ** n * log_ratio * _expm1_over(
+        2 * n * log_ratio)
+
+
+def swift_stress_rise(strain0: float, strain1: float, K: float, n: float,
+                      prestrain: float = 0.0) -> float:
+    """int sigma d(strain) from strain0 to strain1 for Swift's law K (prestrain + strain)^n
+    (Hollomon for prestrain = 0): K [(e0 + e1)^(n+1) - (e0 + e)^(n+1)]/(n + 1), the stress rise of
+    any smooth-die radial flow between the strains of radial_flow_strain."""
+    return K * ((prestrain + strain1) ** (n + 1) - (prestrain + strain0) ** (n + 1)) / (n + 1)
+
+
+def voce_stress_rise(strain0: float, strain1: float, saturation: float, initial: float,
+                     scale: float) -> float:
+    """int sigma d(strain) from strain0 to strain1 for Voce's law
+    sigma_s - (sigma_s - sigma_y) exp(-strain/eps_c): sigma_s (e1 - e0)
+    - (sigma_s - sigma_y) eps_c (exp(-e0/eps_c) - exp(-e1/eps_c))."""
+    return saturation * (strain1 - strain0) - (saturation - initial) * scale * (
+        math.exp(-strain0 / scale) - math.exp(-strain1 / scale))

@@ -171,7 +171,7 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
     ratio = g.exit_thickness / g.entry_thickness
     reduction = 1 - (ratio**2 if g.axisymmetric else ratio)
     return {"reduction": reduction,
-            "central_burst_indicator": central_burst_indicator(reduction, g.die_angle, g.axisymmetric)}
+            "central_burst_indicator": central_burst_indicator(reduction, g.die_angle, g.symmetry)}
 
 
 def free_surface_crossing(problem: FlowProblem) -> float:

@@ -12,6 +12,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from .closed_forms import radial_flow_stress_rise
 from .forms import FlowProblem
 from .geometry import FormingMesh
 from .scene import scene_from_dict
@@ -88,15 +89,10 @@ def radial_velocity(symmetry: str, x):
 
 
 def radial_stress_rise(symmetry: str, n: float) -> float:
-    """sigma_rr(rho1) - sigma_rr(rho0) of the exact flow for the Norton law sigma = K rate^n.
-
-    Cone: rate = 2U/rho^3, d sigma_rr/d rho = -2 sigma/rho, so (2K/(3n)) (2U)^n (rho1^-3n - rho0^-3n).
-    Wedge: rate = (2/sqrt3) U/r^2, d sigma_rr/dr = -(2/sqrt3) sigma/r, so
-    (K/(sqrt3 n)) ((2/sqrt3) U)^n (r1^-2n - r0^-2n)."""
-    K, U, rho0, rho1 = RADIAL["K"], RADIAL["U"], RADIAL["rho0"], RADIAL["rho1"]
-    if symmetry == "axisymmetric":
-        return 2 * K / (3 * n) * (2 * U) ** n * (rho1 ** (-3 * n) - rho0 ** (-3 * n))
-    return K / (3**0.5 * n) * (2 / 3**0.5 * U) ** n * (rho1 ** (-2 * n) - rho0 ** (-2 * n))
+    """sigma_rr(rho1) - sigma_rr(rho0) of the exact flow between the caps of RADIAL for the Norton
+    law sigma = K rate^n (closed_forms.radial_flow_stress_rise with flux U)."""
+    return radial_flow_stress_rise(RADIAL["rho0"], RADIAL["rho1"], RADIAL["K"], n, RADIAL["U"],
+                                   symmetry)
 
 
 def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
