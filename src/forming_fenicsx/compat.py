@@ -103,3 +103,23 @@ def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degre
     velocity = basix.ufl.element("Lagrange", cell, velocity_degree, shape=(mesh.geometry.dim,))
     pressure = basix.ufl.element(pressure_family, cell, pressure_degree)
     return dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([velocity, pressure]))
+
+
+def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
+    """For each point (shape (N, 3)), a local cell (owned or ghost) that contains it, or -1."""
+    import dolfinx.geometry as geometry
+
+    tdim = mesh.topology.dim
+    if LEGACY:
+        tree = geometry.BoundingBoxTree(mesh, tdim)
+        candidates = geometry.compute_collisions(tree, points)
+    else:
+        tree = geometry.bb_tree(mesh, tdim)
+        candidates = geometry.compute_collisions_points(tree, points)
+    colliding = geometry.compute_colliding_cells(mesh, candidates, points)
+    cells = np.full(len(points), -1, dtype=np.int32)
+    for i in range(len(points)):
+        links = colliding.links(i)
+        if len(links):
+            cells[i] = links[0]
+    return cells

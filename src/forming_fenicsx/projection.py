@@ -45,3 +45,28 @@ class LumpedProjector:
         petsc_vec(self.target).pointwiseMult(self._rhs, self._weights)
         self.target.x.scatter_forward()
         return self.target
+
+
+def project_discontinuous(expr: ufl.core.expr.Expr, target: dolfinx.fem.Function,
+                          quadrature_degree: int) -> dolfinx.fem.Function:
+    """The L2 projection of ``expr`` onto the discontinuous space of ``target``: M c = (f, phi_i)
+    with the element-block-diagonal mass matrix M (factorised by MUMPS). Unlike
+    an interpolation it evaluates ``expr`` only at interior Gauss points (the hoop rate u_y/y is
+    0/0 on the axis)."""
+    space = target.function_space
+    u, v = ufl.TrialFunction(space), ufl.TestFunction(space)
+    dx = ufl.dx(domain=space.mesh, metadata={"quadrature_degree": quadrature_degree})
+    mass = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(ufl.inner(u, v) * dx))
+    mass.assemble()
+    rhs = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.inner(expr, v) * dx))
+    rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    ksp = PETSc.KSP().create(space.mesh.comm)
+    ksp.setOperators(mass)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    ksp.solve(rhs, petsc_vec(target))
+    target.x.scatter_forward()
+    for item in (ksp, mass, rhs):
+        item.destroy()
+    return target
