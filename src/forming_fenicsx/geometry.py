@@ -61,16 +61,22 @@ class Edge:
 
 
 def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
-                blocks: list[list[str]], groups: dict[str, list[str]]) -> None:
+                blocks: list[list[str]], groups: dict[str, list[str]],
+                arcs: dict[str, tuple[float, float]] | None = None) -> None:
     """Add transfinite, recombined blocks to the current gmsh model.
 
-    A block is four edge names around it counter-clockwise; a leading '-' reverses an edge.
+    A block is four edge names around it counter-clockwise; a leading '-' reverses an edge. An edge
+    named in ``arcs`` is the circular arc about the centre given there, else a line.
     """
     geo = gmsh.model.geo
     point_tags = {name: geo.addPoint(x, y, 0.0) for name, (x, y) in points.items()}
     edge_tags = {}
     for name, edge in edges.items():
-        tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
+        if arcs and name in arcs:
+            centre = geo.addPoint(*arcs[name], 0.0)
+            tag = geo.addCircleArc(point_tags[edge.start], centre, point_tags[edge.end])
+        else:
+            tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
         geo.mesh.setTransfiniteCurve(tag, edge.elements + 1, "Progression", edge.progression)
         edge_tags[name] = tag
     surfaces = []
@@ -124,63 +130,58 @@ def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, lis
     return {"gamma1_velocity": list(driven), loaded: list(other)}
 
 
-def _drawing(scene: Scene) -> None:
-    """Example 2 half model: a strip through a conical die of semi-angle alpha with a land.
+def _profiled(scene: Scene) -> None:
+    """A workpiece through a profiled die (Example 2's strip, a drawn bar, a conical extrusion).
 
-    Blocks along x: entry [0, xa], cone [xa, xb], land [xb, xc] (omitted without a land), exit [xc, L],
-    with the same number of elements through the thickness; grading refines toward the die entry
-    corner (xa, h0) and the die exit (xc, h1).
+    Blocks along x: before the die [0, x0] (under a free surface for drawing, the container wall
+    for extrusion), one block under each segment of the die wall (lines, and arcs that Q2 follows),
+    then the product [x_n, L], with the same number of elements through the thickness; the ends of
+    the first and last blocks are graded toward the die entry and exit.
     """
     g, disc = scene.geometry, scene.discretisation
     h0, h1, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.length
-    xa, xb, xc = g.die_entry, g.die_entry + g.cone_length, g.die_exit
     size, grade = disc.mesh_size, disc.corner_grading
+    segments = g.profile().segments
     n_y = max(1, math.ceil(h0 / size - 1e-9))
-    n_in, r_in = graded_edge(xa, size, grade, toward_end=True)
-    n_cone, _ = graded_edge(xb - xa, size, 1.0, toward_end=True)
-    n_out, r_out = graded_edge(L - xc, size, grade, toward_end=False)
-    has_land = xc > xb
-    bottom_end, top_end = ("bc", "tc") if has_land else ("bb", "tb")
-    points = {"b0": (0, 0), "ba": (xa, 0), "bb": (xb, 0), "bc": (xc, 0), "bL": (L, 0),
-              "t0": (0, h0), "ta": (xa, h0), "tb": (xb, h1), "tc": (xc, h1), "tL": (L, h1)}
-    if not has_land:
-        del points["bc"], points["tc"]
-    edges = {
-        "bottom_entry": Edge("b0", "ba", n_in, r_in), "bottom_cone": Edge("ba", "bb", n_cone),
-        "bottom_exit": Edge(bottom_end, "bL", n_out, r_out),
-        "entry_face": Edge("b0", "t0", n_y), "die_entry_line": Edge("ba", "ta", n_y),
-        "cone_end_line": Edge("bb", "tb", n_y), "exit_face": Edge("bL", "tL", n_y),
-        "entry_surface": Edge("t0", "ta", n_in, r_in), "cone_face": Edge("ta", "tb", n_cone),
-        "exit_surface": Edge(top_end, "tL", n_out, r_out),
-    }
-    blocks = [["bottom_entry", "die_entry_line", "-entry_surface", "-entry_face"],
-              ["bottom_cone", "cone_end_line", "-cone_face", "-die_entry_line"]]
-    contact, bottom = ["cone_face"], ["bottom_entry", "bottom_cone", "bottom_exit"]
-    if has_land:
-        n_land, _ = graded_edge(xc - xb, size, 1.0, toward_end=True)
-        edges.update({"bottom_land": Edge("bb", "bc", n_land), "land_end_line": Edge("bc", "tc", n_y),
-                      "land_face": Edge("tb", "tc", n_land)})
-        blocks.append(["bottom_land", "land_end_line", "-land_face", "-cone_end_line"])
-        contact.append("land_face")
-        bottom.append("bottom_land")
-        last_line = "land_end_line"
+    tops = [(0.0, h0), *(seg.start for seg in segments), segments[-1].end, (L, h1)]
+    n_in, r_in = graded_edge(tops[1][0], size, grade, toward_end=True)
+    n_out, r_out = graded_edge(L - tops[-2][0], size, grade, toward_end=False)
+    counts = [(n_in, r_in)] + [_elements_along(seg, size) for seg in segments] + [(n_out, r_out)]
+    points = {f"b{i}": (x, 0.0) for i, (x, _) in enumerate(tops)}
+    points.update({f"t{i}": top for i, top in enumerate(tops)})
+    edges = {f"bottom{i}": Edge(f"b{i}", f"b{i + 1}", *counts[i]) for i in range(len(tops) - 1)}
+    edges.update({f"line{i}": Edge(f"b{i}", f"t{i}", n_y) for i in range(len(tops))})
+    edges.update({f"top{i}": Edge(f"t{i}", f"t{i + 1}", *counts[i]) for i in range(len(tops) - 1)})
+    arcs = {f"top{i + 1}": seg.centre for i, seg in enumerate(segments) if seg.centre is not None}
+    blocks = [[f"bottom{i}", f"line{i + 1}", f"-top{i}", f"-line{i}"] for i in range(len(tops) - 1)]
+    last = len(tops) - 1
+    groups = _end_faces(scene, ["line0"], [f"line{last}"])
+    wall = [f"top{i}" for i in range(1, last - 1)]
+    if scene.process.kind == "extrusion":
+        wall.insert(0, "top0")  # the container
     else:
-        last_line = "cone_end_line"
-    blocks.append(["bottom_exit", "exit_face", "-exit_surface", f"-{last_line}"])
-    groups = _end_faces(scene, ["entry_face"], ["exit_face"])
-    groups.setdefault("gamma2_free", []).append("entry_surface")
-    groups.setdefault("gamma4_free", []).append("exit_surface")
-    groups["gamma3_contact"] = contact
-    groups["gamma6_symmetry"] = bottom
-    _add_blocks(points, edges, blocks, groups)
+        groups.setdefault("gamma2_free", []).append("top0")
+    groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
+    groups["gamma3_contact"] = wall
+    groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
+    _add_blocks(points, edges, blocks, groups, arcs)
 
 
-BUILDERS = {"extrusion": _extrusion, "drawing": _drawing}
+def _elements_along(segment, size: float) -> tuple[int, float]:
+    """Elements under a die segment: by its axial extent for a line (as Example 2's cone and land),
+    by its length for an arc; uniform."""
+    extent = segment.end[0] - segment.start[0] if segment.centre is None else segment.length
+    return graded_edge(extent, size, 1.0, toward_end=True)
+
+
+def _builder(scene: Scene):
+    """Example 1's square die, or a profiled die (drawing, conical extrusion)."""
+    return _extrusion if getattr(scene.geometry, "die", "") == "square" else _profiled
 
 
 def _generate(scene: Scene) -> None:
     gmsh.model.add(scene.process.kind)
-    BUILDERS[scene.process.kind](scene)
+    _builder(scene)(scene)
     gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
     gmsh.model.mesh.generate(2)
     gmsh.model.mesh.setOrder(scene.discretisation.degree)
@@ -266,17 +267,19 @@ def _chain_coordinate(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def die_coordinate(scene: Scene, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Arc length along Gamma3 from where the workpiece meets the die, for points on Gamma3.
 
-    Extrusion: along the container wall (from the ram), then down the die face. Drawing: along the
-    cone from the die entry, then along the land. A user's mesh: along the chain of its Gamma3 nodes.
+    Square die: along the container wall (from the ram), then down the die face. A profiled die:
+    along its wall (DieProfile.coordinate), after the container's length for an extrusion. A user's
+    mesh: along the chain of its Gamma3 nodes.
     """
     g = scene.geometry
     if g.mesh_file:
         return _chain_coordinate(x, y)
-    if scene.process.kind == "extrusion":
+    if g.die == "square":
         h0 = 0.5 * g.entry_thickness
         on_face = np.isclose(x, g.die_position) & (y < h0 - 1e-12 * h0)
         return np.where(on_face, g.die_position + (h0 - y), x)
-    cone_end = g.die_entry + g.cone_length
-    slant = g.cone_length / math.cos(math.radians(g.die_angle))
-    return np.where(x <= cone_end, (x - g.die_entry) / math.cos(math.radians(g.die_angle)),
-                    slant + (x - cone_end))
+    profile = g.profile()
+    along = profile.coordinate(x, y)
+    if scene.process.kind == "drawing":
+        return along
+    return np.where(x < profile.start[0], x, profile.start[0] + along)

@@ -75,11 +75,16 @@ def strip_triangulation(geometry: DrawingGeometry, size_min: float, size_max: fl
     the local half-thickness, each quadrilateral cut into four triangles where its diagonals cross
     (a crossed-diagonal mesh, which does not lock under incompressibility). Returns the
     points, the triangles (vertex indices) and the boundary edges by role: free, die, symmetry, exit.
-    The bounds are those of plane strain: a round bar's (symmetry = "axisymmetric") are refused.
+    The bounds are those of plane strain through a straight cone: a round bar's (symmetry =
+    "axisymmetric") and other die profiles are refused.
     """
     if geometry.axisymmetric:
         raise SceneError("geometry.symmetry", "the limit-analysis bounds are built for plane strain "
                          '(triangles of the strip); not for symmetry = "axisymmetric"')
+    if len(geometry.profile().segments) > 2 or geometry.entry_radius:
+        raise SceneError("geometry.die_profile_file" if geometry.die_profile_file else "geometry.die_angle",
+                         "the limit-analysis bounds are built for a straight cone with a land; not for "
+                         "an entry radius, a second angle or a CSV profile")
     h0, h1 = 0.5 * geometry.entry_thickness, 0.5 * geometry.exit_thickness
     xa = geometry.die_entry
     xb, xc, length = xa + geometry.cone_length, geometry.die_exit, geometry.length

@@ -84,13 +84,14 @@ def _finish(fig, ax, outlines: np.ndarray, path: Path, units: Units) -> Path:
 
 
 def write_die_plot(profile: dict, path: Path, title: str, units: Units) -> Path:
-    """die.png: contact pressure (and averaged normal stress, friction stress) along the die."""
+    """die.png: contact pressure (and averaged normal stress, friction stress) along the die, and
+    below it the die profile y(x) through the nodes of Gamma3 (die.csv's x and y)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig, (ax, shape) = plt.subplots(2, 1, figsize=(8, 7), gridspec_kw={"height_ratios": [3, 2]})
     labels = {"contact_pressure": "contact pressure -sigma_N", "averaged_normal_stress": "averaged normal stress",
               "friction_stress": "friction stress |sigma_T|"}
     for key, label in labels.items():
@@ -101,6 +102,13 @@ def write_die_plot(profile: dict, path: Path, title: str, units: Units) -> Path:
     ax.set_title(f"{title}: die stresses")
     ax.grid(True, alpha=0.3)
     ax.legend()
+    shape.plot(profile["x"], profile["y"], "k.-", label="die wall (nodes of Gamma3)")
+    shape.set_xlabel(units.labelled("x, along the axis", "length"))
+    shape.set_ylabel(units.labelled("y, half-thickness or radius", "length"))
+    shape.set_ylim(bottom=0.0)
+    shape.set_title("die profile")
+    shape.grid(True, alpha=0.3)
+    shape.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)

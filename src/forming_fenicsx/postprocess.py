@@ -140,10 +140,10 @@ def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
     return {key: profile[key][order] for key in ["s", *columns]}
 
 
-def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
-    """q_av over the contact part of the die cone (the paper's mean die pressure; over all of Gamma3 for
-    a user's mesh), contact length and the x where the strip leaves the die (last node of Gamma3 with
-    positive contact pressure)."""
+def die_scalars(problem: FlowProblem) -> dict[str, float]:
+    """q_av over the contact part of the die from its entry to the land (the paper's mean die
+    pressure; over all of Gamma3 for a user's mesh), contact length and the x where the workpiece
+    leaves the die (last node of Gamma3 with positive contact pressure)."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
     start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
     cone = 1.0 if g.mesh_file else ufl.conditional(
@@ -164,14 +164,15 @@ def drawing_scalars(problem: FlowProblem) -> dict[str, float]:
 
 def pass_shape(problem: FlowProblem) -> dict[str, float]:
     """The reduction r (of area for a round bar, of thickness for a strip) and the central-burst
-    indicator Delta of a conical die (closed_forms.central_burst_indicator); none for a user's mesh."""
+    indicator Delta of a profiled die at its semi_angle (closed_forms.central_burst_indicator); none
+    for a user's mesh."""
     g = problem.scene.geometry
     if g.mesh_file is not None:
         return {}
     ratio = g.exit_thickness / g.entry_thickness
     reduction = 1 - (ratio**2 if g.axisymmetric else ratio)
     return {"reduction": reduction,
-            "central_burst_indicator": central_burst_indicator(reduction, g.die_angle, g.symmetry)}
+            "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle, g.symmetry)}
 
 
 def free_surface_crossing(problem: FlowProblem) -> float:
@@ -281,11 +282,13 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         height = _integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
         process = {"ram_force": force, "ram_pressure": force / height,
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
+        if problem.scene.geometry.die != "square":
+            process.update({**die_scalars(problem), **pass_shape(problem)})
     else:
         stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
         strength = problem.coordinates.tensile_yield_factor * problem.scene.reference_flow_stress
         process = {"drawing_force": force, "drawing_stress": stress, "product_yield_ratio": stress / strength,
-                   **drawing_scalars(problem), **pass_shape(problem)}
+                   **die_scalars(problem), **pass_shape(problem)}
     return {
         **process,
         "die_force_x": die_normal + die_friction,

@@ -26,6 +26,7 @@ from typing import Any, ClassVar
 from .errors import SceneError
 from .material import LAWS, FlowLaw, PiecewisePowerLaw
 from .coordinates import SYMMETRIES
+from .die_profile import DieProfile, parametric_profile, polyline_profile, read_profile_csv
 from .msh import mesh_dimensions
 from .relative import check_positive, set_pair
 from .units import Units
@@ -111,6 +112,7 @@ class _Strip:
     def resolve(self) -> None:
         """Fill in the lengths left out: from the mesh file, or the paper's geometry scaled."""
         self._diameters()
+        self._die_file()
         for key in ("entry_thickness", "exit_thickness"):
             check_positive(f"geometry.{key.replace('thickness', self.thickness_name)}", getattr(self, key))
         if self.mesh_file is not None:
@@ -150,6 +152,9 @@ class _Strip:
     def check_die(self) -> None:
         """The die's own data (not with a mesh file)."""
 
+    def _die_file(self) -> None:
+        """Read the die's own file, if it has one."""
+
     def check(self) -> None:
         """Lengths finite and > 0, a die that reduces the thickness and ends before the strip does."""
         name = self.thickness_name
@@ -182,6 +187,7 @@ class ExtrusionGeometry(_Strip):
     symmetry: str = "plane_strain"
     entry_diameter: float | None = None
     exit_diameter: float | None = None
+    die: str = "square"
 
     @property
     def die_end(self) -> float:
@@ -197,18 +203,135 @@ class ExtrusionGeometry(_Strip):
         return f"geometry.die_position is {self.die_position}"
 
 
-@dataclass
-class DrawingGeometry(_Strip):
-    """Plane-strain strip drawing through a conical die with a land (Example 2); full thicknesses.
+class _ProfiledDie(_Strip):
+    """A die whose wall is a profile (die_profile.py): a cone of semi-angle ``die_angle`` (degrees)
+    met by the workpiece at x = ``die_entry``, an optional entry cone at ``second_angle`` over the
+    axial length ``second_angle_length`` before it, an ``entry_radius`` rounding the corner where the
+    workpiece meets the die, and a land (bearing) of ``land_length`` at the exit size; or the polyline
+    of a CSV file ``die_profile_file`` (header x,y; from the entry size down to the exit size, with the
+    land as its last level part), whose ends give the thicknesses when they are left out."""
 
-    The strip meets the die at x = die_entry; the die face falls at the semi-angle die_angle (degrees)
-    to the exit half-thickness, then runs parallel for land_length. Left out: the paper's 7.8 long,
-    1.625 -> 1.5 strip, a 6 degree die met at x = 3 with a land of 0.15, scaled (the angle is not)."""
+    PROFILE_KEYS: ClassVar[tuple[str, ...]] = ("die_angle", "entry_radius", "second_angle",
+                                               "second_angle_length", "land_length", "die_entry")
+    DIE_KEYS: ClassVar[tuple[str, ...]] = (*PROFILE_KEYS, "die_profile_file")
+    LENGTH_KEY: ClassVar[str] = "geometry.land_length"
+    die_angle: float | None
+    land_length: float | None
+    die_entry: float | None
+    entry_radius: float | None
+    second_angle: float | None
+    second_angle_length: float | None
+    die_profile_file: str | None
+
+    def _die_file(self) -> None:
+        """With die_profile_file: the thicknesses (when left out), die_entry and the recorded
+        die_angle (the effective one, DieProfile.effective_angle) from the CSV polyline; the
+        parametric keys do not apply."""
+        if self.mesh_file is not None:
+            return
+        if self.die_profile_file is None:
+            if self.entry_radius is None:
+                self.entry_radius = 0.0
+            return
+        for key in self.PROFILE_KEYS:
+            if getattr(self, key) is not None:
+                raise SceneError(f"geometry.{key}", "does not apply with geometry.die_profile_file (the "
+                                 "die is the file's polyline); leave it out")
+        points = read_profile_csv(self.die_profile_file, "geometry.die_profile_file")
+        for end, y in (("entry", points[0, 1]), ("exit", points[-1, 1])):
+            key = f"{end}_thickness"
+            given = getattr(self, key)
+            if given is not None and not math.isclose(given, 2 * y, rel_tol=1e-9):
+                raise SceneError(f"geometry.{end}_{self.thickness_name}",
+                                 f"is {given} but geometry.die_profile_file runs from y = "
+                                 f"{points[0, 1]:.9g} to {points[-1, 1]:.9g} (half-sizes): leave it out "
+                                 "or correct it")
+            setattr(self, key, 2 * y)
+        self._polyline = points
+        if self.exit_thickness >= self.entry_thickness:
+            raise SceneError("geometry.die_profile_file", "must fall from the entry size to a smaller "
+                             "exit size")
+        profile = polyline_profile(points)
+        self.die_entry, self.entry_radius = float(points[0, 0]), 0.0
+        self.land_length = profile.end[0] - profile.land_start
+        self.die_angle = profile.effective_angle
+
+    def check_die(self) -> None:
+        check_positive("geometry.die_entry", self.die_entry)
+        if self.die_profile_file is not None:
+            return
+        for key in ("die_angle", "second_angle"):
+            value = getattr(self, key)
+            if value is not None and not 0 < value < 90:
+                raise SceneError(f"geometry.{key}", f"must lie in (0, 90) degrees (a semi-angle); got {value}")
+        for key in ("land_length", "entry_radius"):
+            if not getattr(self, key) >= 0:
+                raise SceneError(f"geometry.{key}", f"must be a finite number >= 0; got {getattr(self, key)}")
+        if (self.second_angle is None) != (self.second_angle_length is None):
+            raise SceneError("geometry.second_angle" if self.second_angle is None else
+                             "geometry.second_angle_length",
+                             "a two-angle die needs both geometry.second_angle and second_angle_length")
+        if self.second_angle_length is not None:
+            check_positive("geometry.second_angle_length", self.second_angle_length)
+        try:
+            profile = self.profile()
+        except ValueError as error:
+            key = "geometry.entry_radius" if "radius" in str(error) else "geometry.second_angle_length"
+            raise SceneError(key, str(error)) from None
+        if profile.start[0] <= 0:
+            raise SceneError("geometry.die_entry", f"the die begins at x = {profile.start[0]:.4g}: "
+                             "it must begin after the entry face x = 0 (raise die_entry)")
+
+    def profile(self) -> DieProfile:
+        """The die wall (die_profile.py)."""
+        if self.die_profile_file is not None:
+            return polyline_profile(self._polyline)
+        return parametric_profile(self.die_entry, 0.5 * self.entry_thickness, 0.5 * self.exit_thickness,
+                                  self.die_angle, self.land_length, self.entry_radius, self.second_angle,
+                                  self.second_angle_length or 0.0)
+
+    @property
+    def semi_angle(self) -> float:
+        """The semi-angle (degrees) closed forms and the central-burst indicator take: die_angle
+        (for a CSV profile the recorded effective one), the chord's from the die entry to the land
+        (DieProfile.effective_angle) for a two-angle die."""
+        return self.die_angle if self.second_angle is None else self.profile().effective_angle
+
+    def _die_text(self) -> str:
+        return (f"the die (entry at {self.die_entry}, cone {self.cone_length:.4g} long, land "
+                f"{self.land_length}) ends at {self.die_exit:.4g}")
+
+    @property
+    def cone_length(self) -> float:
+        """Axial length from the die entry to the land."""
+        if self.die_profile_file is not None or self.second_angle is not None:
+            return self.profile().land_start - self.die_entry
+        return 0.5 * (self.entry_thickness - self.exit_thickness) / math.tan(math.radians(self.die_angle))
+
+    @property
+    def die_exit(self) -> float:
+        """x at the end of the land."""
+        if self.die_profile_file is not None or self.second_angle is not None:
+            return self.profile().end[0]
+        return self.die_entry + self.cone_length + self.land_length
+
+    @property
+    def die_end(self) -> float:
+        return self.die_exit
+
+    def _paper_die_end(self) -> float:
+        paper = type(self)(**{k: v for k, v in self.PAPER.items() if k != "length"})
+        return paper.die_exit
+
+
+@dataclass
+class DrawingGeometry(_ProfiledDie):
+    """Plane-strain strip (or round bar) drawing through a conical die with a land (Example 2); full
+    thicknesses. Left out: the paper's 7.8 long, 1.625 -> 1.5 strip, a 6 degree die met at x = 3 with a
+    land of 0.15, scaled (the angle is not)."""
 
     PAPER: ClassVar[dict[str, float]] = {"length": 7.8, "entry_thickness": 1.625, "exit_thickness": 1.5,
                                          "die_angle": 6.0, "land_length": 0.15, "die_entry": 3.0}
-    DIE_KEYS: ClassVar[tuple[str, ...]] = ("die_angle", "land_length", "die_entry")
-    LENGTH_KEY: ClassVar[str] = "geometry.land_length"
     length: float | None = None
     entry_thickness: float | None = None
     exit_thickness: float | None = None
@@ -219,35 +342,36 @@ class DrawingGeometry(_Strip):
     symmetry: str = "plane_strain"
     entry_diameter: float | None = None
     exit_diameter: float | None = None
+    entry_radius: float | None = None
+    second_angle: float | None = None
+    second_angle_length: float | None = None
+    die_profile_file: str | None = None
+    die: str = "conical"
 
-    def check_die(self) -> None:
-        check_positive("geometry.die_entry", self.die_entry)
-        if not 0 < self.die_angle < 90:
-            raise SceneError("geometry.die_angle", f"must lie in (0, 90) degrees (the semi-angle); got {self.die_angle}")
-        if not self.land_length >= 0:
-            raise SceneError("geometry.land_length", f"must be a finite number >= 0; got {self.land_length}")
 
-    def _die_text(self) -> str:
-        return (f"the die (entry at {self.die_entry}, cone {self.cone_length:.4g} long, land {self.land_length}) "
-                f"ends at {self.die_exit:.4g}")
+@dataclass
+class ConicalExtrusionGeometry(_ProfiledDie):
+    """Extrusion through a conical die (``die = "conical"``): the ram pushes the billet along a
+    container (in contact, x from 0 to die_entry) into the die. Left out: a 10 -> 5 billet, a
+    45 degree die at x = 10 with a land of 1, 10 of product after it, scaled (the angle is not)."""
 
-    @property
-    def cone_length(self) -> float:
-        """Axial length of the conical die face."""
-        return 0.5 * (self.entry_thickness - self.exit_thickness) / math.tan(math.radians(self.die_angle))
-
-    @property
-    def die_exit(self) -> float:
-        """x at the end of the land."""
-        return self.die_entry + self.cone_length + self.land_length
-
-    @property
-    def die_end(self) -> float:
-        return self.die_exit
-
-    def _paper_die_end(self) -> float:
-        paper = DrawingGeometry(**{k: v for k, v in self.PAPER.items() if k != "length"})
-        return paper.die_exit
+    PAPER: ClassVar[dict[str, float]] = {"length": 23.5, "entry_thickness": 10.0, "exit_thickness": 5.0,
+                                         "die_angle": 45.0, "land_length": 1.0, "die_entry": 10.0}
+    length: float | None = None
+    entry_thickness: float | None = None
+    exit_thickness: float | None = None
+    die_angle: float | None = None
+    land_length: float | None = None
+    die_entry: float | None = None
+    mesh_file: str | None = None
+    symmetry: str = "plane_strain"
+    entry_diameter: float | None = None
+    exit_diameter: float | None = None
+    entry_radius: float | None = None
+    second_angle: float | None = None
+    second_angle_length: float | None = None
+    die_profile_file: str | None = None
+    die: str = "conical"
 
 
 NORMAL_STRESSES = ("averaged", "local")
@@ -446,7 +570,18 @@ class Output:
             raise SceneError("output.die_entry_trim", f"must be a finite number >= 0; got {self.die_entry_trim}")
 
 
-GEOMETRIES = {"extrusion": ExtrusionGeometry, "drawing": DrawingGeometry}
+# The geometry of each process and geometry.die (the first is the default)
+GEOMETRIES = {"extrusion": {"square": ExtrusionGeometry, "conical": ConicalExtrusionGeometry},
+              "drawing": {"conical": DrawingGeometry}}
+
+
+def geometry_class(kind: str, table: dict[str, Any]) -> type:
+    """The geometry class that geometry.die names for the process."""
+    dies = GEOMETRIES[kind]
+    die = table.get("die", next(iter(dies)))
+    if not isinstance(die, str) or die not in dies:
+        raise SceneError("geometry.die", f"must be one of {', '.join(dies)} for {kind}; got {die!r}")
+    return dies[die]
 
 # Each process's defaults over the dataclass ones: the paper's process data (Example 1 and Example 2).
 # Example 2's Q1 elements with complete integration lock (docs/example2.md): the drawing default is Q2
@@ -469,7 +604,7 @@ class Scene:
     """One run, fully specified (after :meth:`resolve`, every value absolute)."""
 
     process: Process
-    geometry: ExtrusionGeometry | DrawingGeometry
+    geometry: ExtrusionGeometry | ConicalExtrusionGeometry | DrawingGeometry
     material: FlowLaw
     friction: Friction
     penalty: Penalty
@@ -621,7 +756,7 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     defaults = PROCESS_DEFAULTS[kind]
     process = _build(Process, tables["process"], "process", defaults.get("process"))
     process.check()
-    classes = {"geometry": GEOMETRIES[kind], "friction": Friction, "penalty": Penalty,
+    classes = {"geometry": geometry_class(kind, tables["geometry"]), "friction": Friction, "penalty": Penalty,
                "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units}
     built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
     scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {})), **built)

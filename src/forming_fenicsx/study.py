@@ -85,10 +85,11 @@ def exact_value(scene, quantity: str) -> float | None:
     if rough or process.applied_force is not None or geometry.mesh_file is not None or geometry.axisymmetric:
         return None
     k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
-    if (process.kind == "extrusion" and quantity == "ram_pressure"
+    if (process.kind == "extrusion" and quantity == "ram_pressure" and geometry.die == "square"
             and math.isclose(geometry.exit_thickness, 0.5 * geometry.entry_thickness)):
         return (1 + math.pi / 2) * k
-    if process.kind == "drawing" and quantity in ("mean_die_pressure", "drawing_stress"):
+    if (process.kind == "drawing" and quantity in ("mean_die_pressure", "drawing_stress")
+            and len(geometry.profile().segments) <= 2 and not geometry.entry_radius):
         angle = math.radians(geometry.die_angle)
         r = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
         if math.isclose(geometry.exit_thickness, geometry.entry_thickness * (1 - r), rel_tol=1e-9):
