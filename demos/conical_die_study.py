@@ -99,11 +99,13 @@ def figure(rows: list[dict], path: Path) -> None:
                     [r["fe"] for r in line if not trusted(r)], "o", mfc="none", color=colour)
             ax.plot([r["angle"] for r in line], [r["closed_form"] for r in line], "--", color=colour,
                     label=("Sachs " if law == "coulomb" else "Avitzur ") + name)
-        ax.set_title(f"reduction of area {reduction:.0%} (open: not converged or a sanity warning)")
+        ax.set_title(f"reduction of area {reduction:.0%}")
         ax.set_xlabel("die semi-angle [deg]")
         ax.set_ylabel("drawing stress / flow stress")
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=7)
+    fig.suptitle("Round wire drawing, FE (lines with dots; open dots: not converged or a sanity "
+                 "warning) against Sachs (Coulomb mu) and Avitzur (friction factor m)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -113,16 +115,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--angles", type=float, nargs="+", default=ANGLES)
     parser.add_argument("--out", default=str(ROOT / "results" / "conical_dies.json"))
+    parser.add_argument("--replot", action="store_true",
+                        help="redraw the figure and tables from the --out file, without running")
     args = parser.parse_args()
-    rows = []
-    for reduction in REDUCTIONS:
+    out = Path(args.out)
+    rows = json.loads(out.read_text()) if args.replot else []
+    for reduction in REDUCTIONS if not args.replot else ():
         for angle in args.angles:
             for law, value in FRICTION:
                 row = drawing_stress(angle, reduction, law, value)
                 row["closed_form"] = closed_form(row)
                 rows.append(row)
                 print(json.dumps(row), flush=True)
-    out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(rows, indent=1))
     figure(rows, ROOT / "docs" / "conical_dies.png")
