@@ -203,6 +203,7 @@ class ExtrusionGeometry(_Strip):
         return f"geometry.die_position is {self.die_position}"
 
 
+@dataclass
 class _ProfiledDie(_Strip):
     """A die whose wall is a profile (die_profile.py): a cone of semi-angle ``die_angle`` (degrees)
     met by the workpiece at x = ``die_entry``, an optional entry cone at ``second_angle`` over the
@@ -215,13 +216,21 @@ class _ProfiledDie(_Strip):
                                                "second_angle_length", "land_length", "die_entry")
     DIE_KEYS: ClassVar[tuple[str, ...]] = (*PROFILE_KEYS, "die_profile_file")
     LENGTH_KEY: ClassVar[str] = "geometry.land_length"
-    die_angle: float | None
-    land_length: float | None
-    die_entry: float | None
-    entry_radius: float | None
-    second_angle: float | None
-    second_angle_length: float | None
-    die_profile_file: str | None
+    length: float | None = None
+    entry_thickness: float | None = None
+    exit_thickness: float | None = None
+    die_angle: float | None = None
+    land_length: float | None = None
+    die_entry: float | None = None
+    mesh_file: str | None = None
+    symmetry: str = "plane_strain"
+    entry_diameter: float | None = None
+    exit_diameter: float | None = None
+    entry_radius: float | None = None
+    second_angle: float | None = None
+    second_angle_length: float | None = None
+    die_profile_file: str | None = None
+    die: str = "conical"
 
     def _die_file(self) -> None:
         """With die_profile_file: the thicknesses (when left out), die_entry and the recorded
@@ -332,21 +341,6 @@ class DrawingGeometry(_ProfiledDie):
 
     PAPER: ClassVar[dict[str, float]] = {"length": 7.8, "entry_thickness": 1.625, "exit_thickness": 1.5,
                                          "die_angle": 6.0, "land_length": 0.15, "die_entry": 3.0}
-    length: float | None = None
-    entry_thickness: float | None = None
-    exit_thickness: float | None = None
-    die_angle: float | None = None
-    land_length: float | None = None
-    die_entry: float | None = None
-    mesh_file: str | None = None
-    symmetry: str = "plane_strain"
-    entry_diameter: float | None = None
-    exit_diameter: float | None = None
-    entry_radius: float | None = None
-    second_angle: float | None = None
-    second_angle_length: float | None = None
-    die_profile_file: str | None = None
-    die: str = "conical"
 
 
 @dataclass
@@ -357,21 +351,6 @@ class ConicalExtrusionGeometry(_ProfiledDie):
 
     PAPER: ClassVar[dict[str, float]] = {"length": 23.5, "entry_thickness": 10.0, "exit_thickness": 5.0,
                                          "die_angle": 45.0, "land_length": 1.0, "die_entry": 10.0}
-    length: float | None = None
-    entry_thickness: float | None = None
-    exit_thickness: float | None = None
-    die_angle: float | None = None
-    land_length: float | None = None
-    die_entry: float | None = None
-    mesh_file: str | None = None
-    symmetry: str = "plane_strain"
-    entry_diameter: float | None = None
-    exit_diameter: float | None = None
-    entry_radius: float | None = None
-    second_angle: float | None = None
-    second_angle_length: float | None = None
-    die_profile_file: str | None = None
-    die: str = "conical"
 
 
 NORMAL_STRESSES = ("averaged", "local")
