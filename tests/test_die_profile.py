@@ -177,3 +177,17 @@ def test_conical_extrusion_ram_pressure(symmetry, tmp_path):
         header = (tmp_path / symmetry / "die.csv").read_text().splitlines()[0]
         assert header.startswith("s,x,y,contact_pressure")
         assert (tmp_path / symmetry / "die.png").stat().st_size > 10_000
+
+
+def test_a_relative_profile_file_is_read_beside_the_scene(tmp_path):
+    """A scene file naming die_profile_file = "die.csv" reads the CSV beside it, from any working
+    directory."""
+    from forming_fenicsx.scene import load_scene
+
+    (tmp_path / "die.csv").write_text("x,y\n4.0,1.5\n4.5,1.3937\n6.1,1.25\n7.1,1.25\n")
+    (tmp_path / "strip.toml").write_text(
+        '[process]\nkind = "drawing"\n[geometry]\ndie_profile_file = "die.csv"\nlength = 14.0\n')
+    geometry = load_scene(tmp_path / "strip.toml").geometry
+    assert geometry.entry_thickness == 3.0 and geometry.exit_thickness == 2.5
+    assert geometry.land_length == pytest.approx(1.0, rel=1e-12)
+    assert len(geometry.profile().segments) == 3

@@ -775,8 +775,8 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
 
 
 def read_scene_data(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
-    """Read a scene file and apply overrides, without validating; a relative mesh_file is taken
-    relative to the scene file."""
+    """Read a scene file and apply overrides, without validating; a relative mesh_file or
+    die_profile_file is taken relative to the scene file."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())
@@ -786,8 +786,9 @@ def read_scene_data(path: str | Path, overrides: list[str] | None = None) -> dic
         raise SceneError(str(path), f"not valid TOML: {exc}") from None
     data = apply_overrides(data, overrides or [])
     geometry = data.get("geometry")
-    if isinstance(geometry, dict) and isinstance(geometry.get("mesh_file"), str):
-        geometry["mesh_file"] = str(path.parent / geometry["mesh_file"])  # relative to the scene file
+    for key in ("mesh_file", "die_profile_file"):  # relative to the scene file
+        if isinstance(geometry, dict) and isinstance(geometry.get(key), str):
+            geometry[key] = str(path.parent / geometry[key])
     return data
 
 
