@@ -29,7 +29,7 @@ def scene(kind: str, system: str, velocity: float) -> Scene:
     return scene_from_dict({
         "process": {"kind": kind, "velocity": velocity / length},
         "geometry": {key: value if key == "die_angle" else value / length for key, value in geometry.items()},
-        "material": {"law": "power", "A": 300.0 / stress, "n": N}, "friction": {"mu": 0.08},
+        "material": {"law": "rate_power", "A": 300.0 / stress, "n": N}, "friction": {"mu": 0.08},
         "discretisation": {"mesh_size_relative": 0.5, "averaging": "quadrature"},
         "solver": {"method": "newton"}, "units": dict(zip(("length", "time", "stress", "force"), names)),
         "output": {"fields": False, "figures": False}})

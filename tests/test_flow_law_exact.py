@@ -18,7 +18,7 @@ from forming_fenicsx.solvers import SecantSolver
 from conftest import make_scene
 
 LAWS = {"piecewise_power": {"law": "piecewise_power", "A": 3**0.5, "alpha": 0.2, "rate1": 1e-2, "rate2": 1e2},
-        "power": {"law": "power", "A": 2.0, "n": 0.4, "rate_floor": 1e-6}}
+        "power": {"law": "rate_power", "A": 2.0, "n": 0.4, "rate_floor": 1e-6}}
 
 
 def solve_box(material: dict, element: str, averaging: str, exact) -> FlowProblem:

@@ -1,4 +1,5 @@
-"""Flow-stress laws (4.5) and the pure power law: values, condition (2.10), rejection of bad constants."""
+"""Flow-stress laws (4.5), the rate power law and the hardening laws: values, condition (2.10),
+rejection of bad constants, named materials."""
 import math
 
 import numpy as np
@@ -52,3 +53,74 @@ def test_laws_breaking_2_10_are_rejected(law, key):
         law.check()
     assert error.value.key == key
 
+
+
+def hardening_laws():
+    """One law of each hardening curve and rate factor."""
+    from forming_fenicsx.material import HollomonLaw, SwiftLaw, VoceLaw
+
+    return [HollomonLaw(K=315.0, n=0.54).resolve(1.0),
+            SwiftLaw(K=500.0, n=0.2, prestrain=0.02, rate_factor="power", m=0.05).resolve(1.0),
+            VoceLaw(initial=100.0, saturation=250.0, scale=0.3, rate_factor="log", C=0.03,
+                    reference_rate=0.1).resolve(1.0)]
+
+
+def test_hardening_curves_and_rate_factors():
+    """Hollomon K eps^n (floored at 0.002), Swift K (e0 + eps)^n (rate/ref)^m, Voce with
+    1 + C ln(rate/ref) above ref and (rate/ref)^C below: values to rounding."""
+    hollomon, swift, voce = hardening_laws()
+    assert hollomon.flow_stress([1.0], 0.3)[0] == pytest.approx(315 * 0.3**0.54 * 1.0, rel=1e-12)
+    assert hollomon.flow_stress([1.0], 0.0)[0] == pytest.approx(315 * 0.002**0.54, rel=1e-12)
+    assert swift.flow_stress([8.0], 0.1)[0] == pytest.approx(500 * 0.12**0.2 * 8.0**0.05, rel=1e-12)
+    h = 250 - 150 * math.exp(-0.2 / 0.3)
+    assert voce.flow_stress([10.0], 0.2)[0] == pytest.approx(h * (1 + 0.03 * math.log(100)), rel=1e-12)
+    assert voce.flow_stress([0.01], 0.2)[0] == pytest.approx(h * 0.1**0.03, rel=1e-12)
+    assert hollomon.flow_stress([1e3], 0.3)[0] / hollomon.flow_stress([1e-3], 0.3)[0] == \
+        pytest.approx(1e6**1e-3, rel=1e-12)  # rate_factor "none": the regularising exponent only
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_hardening_laws_satisfy_2_10_in_the_rate(index):
+    """eta_1 <= d sigma/d rate <= sigma/rate <= eta_2 sampled over ten decades of rate at three
+    strains: the slope positive, below the secant, the secant bounded by its value at the floor."""
+    law = hardening_laws()[index]
+    rates = np.logspace(-8, 4, 400)
+    for strain in (0.0, 0.3, 2.0):
+        sigma = law.flow_stress(rates, strain)
+        slope = np.diff(sigma) / np.diff(rates)
+        secant = sigma / rates
+        assert np.all(slope > 0)
+        assert np.all(slope <= secant[:-1] * (1 + 1e-9))
+        assert secant.max() <= law.secant(np.array([0.0]), strain)[0] * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_potential_derivative_is_the_flow_stress(index):
+    """d W/d rate = sigma_p at the frozen strain, by a central difference of the UFL potential
+    evaluated as a constant expression, across the floor and the reference rate."""
+    import ufl
+
+    law = hardening_laws()[index]
+    for value in (1e-7, 0.05, 0.1, 3.0, 300.0):
+        h = 1e-6 * value
+
+        def potential(r):
+            return float(law.potential_ufl(ufl.as_ufl(r), ufl.as_ufl(0.4)))
+
+        derivative = (potential(value + h) - potential(value - h)) / (2 * h)
+        assert derivative == pytest.approx(law.flow_stress([value], 0.4)[0], rel=1e-6)
+
+
+def test_named_material_cited_and_overridden():
+    """material.name = "copper_annealed" is Hollomon K = 315 MPa, n = 0.54 (Kalpakjian & Schmid);
+    a key given beside it overrides the table's."""
+    from forming_fenicsx.scene import scene_from_dict
+
+    data = {"process": {"kind": "drawing"}, "units": {"stress": "MPa", "length": "mm"},
+            "material": {"name": "copper_annealed"}, "discretisation": {"averaging": "quadrature"}}
+    law = scene_from_dict(data).material
+    assert (law.law, law.K, law.n) == ("hollomon", 315.0, 0.54)
+    data["material"]["K"] = 400.0
+    assert scene_from_dict(data).material.K == 400.0
+    with pytest.raises(SceneError, match="quadrature"):
+        scene_from_dict({**data, "discretisation": {"averaging": "nodes"}})

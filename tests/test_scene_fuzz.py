@@ -20,7 +20,7 @@ outcomes: collections.Counter = collections.Counter()
 scalars = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**6, 10**6), st.booleans(),
     st.sampled_from(["Q1", "Q2", "reduced", "complete", "nodes", "centres", "direct", "modified", "extrusion",
-                     "drawing", "push", "pull", "power", "piecewise_power", "averaged", "local", "penalty",
+                     "drawing", "push", "pull", "rate_power", "hollomon", "voce", "piecewise_power", "averaged", "local", "penalty",
                      "stress", "", "nan"]),
     st.text(max_size=8))
 values = st.one_of(scalars, st.lists(scalars, max_size=3), st.dictionaries(st.text(max_size=5), scalars, max_size=3))

@@ -1,14 +1,16 @@
-"""Rigid-plastic, strain-rate dependent flow-stress laws and their secant coefficient.
+"""Rigid-plastic flow-stress laws sigma_p(rate[, strain]) and their secant coefficient.
 
-Each law gives the uniaxial yield limit sigma_p(rate) and the secant coefficient
-G(rate) = sigma_p(rate)/rate used by a(w; u, v) of (3.2). Both laws satisfy (2.10)
-(eta_1 <= sigma_p' <= sigma_p/rate <= eta_2) on the parameters their ``check`` accepts.
+Each law gives the uniaxial yield limit sigma_p and the secant coefficient G = sigma_p/rate used by
+a(w; u, v) of (3.2); every law satisfies (2.10) (eta_1 <= d sigma_p/d rate <= sigma_p/rate <= eta_2)
+in the rate on the parameters its ``check`` accepts. The paper's (4.5) and the rate power law depend
+on the rate only; Hollomon, Swift and Voce harden with the equivalent strain, times a rate factor.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import ufl
@@ -28,6 +30,7 @@ class PiecewisePowerLaw:
     rate1: float = 1e-3
     rate2: float = 1e3
     law: str = "piecewise_power"
+    hardens: ClassVar[bool] = False
 
     def check(self, section: str = "material") -> None:
         """Reject parameters that break (2.10)."""
@@ -82,7 +85,9 @@ class PiecewisePowerLaw:
 
 @dataclass(frozen=True)
 class PowerLaw:
-    """Pure power law sigma_p = A*rate**n with a floor rate_floor below which the secant is constant.
+    """The strain-rate power law sigma_p = A*rate**n (``law = "rate_power"``: no strain hardening;
+    Hollomon's K eps^n is ``law = "hollomon"``), with a floor rate_floor below which the secant is
+    constant.
 
     Without the floor the secant A*rate**(n-1) is unbounded at rate -> 0 and (2.10) fails; with it,
     (2.10) holds on every bounded range of rates. The floor is a regularisation, not a material
@@ -94,7 +99,8 @@ class PowerLaw:
     n: float = 0.5
     rate_floor: float | None = None
     rate_floor_relative: float | None = None
-    law: str = "power"
+    law: str = "rate_power"
+    hardens: ClassVar[bool] = False
 
     def resolve(self, process_rate: float) -> PowerLaw:
         """The law with its rate floor absolute (and relative to the process strain rate)."""
@@ -132,5 +138,214 @@ class PowerLaw:
                                / (self.n + 1.0))
 
 
-LAWS = {"piecewise_power": PiecewisePowerLaw, "power": PowerLaw}
-FlowLaw = PiecewisePowerLaw | PowerLaw
+# The exponent that stands for rate independence: (2.10) needs sigma_p to rise with the rate; this
+# one changes it by 1.4 % over six decades (the paper's alpha of (4.5)).
+RATE_INDEPENDENT_EXPONENT = 1e-3
+RATE_FACTORS = ("none", "power", "log")
+
+
+@dataclass(frozen=True)
+class _Hardening:
+    """sigma_p(rate, eps) = H(eps) r(rate): a hardening curve H of the equivalent strain times a rate
+    factor r with r(reference_rate) = 1:
+    - ``rate_factor = "none"``: r = (rate/ref)^1e-3 (rate-independent up to the exponent (2.10) needs),
+    - ``"power"``: r = (rate/ref)^m, 0 < m <= 1,
+    - ``"log"``: r = 1 + C ln(rate/ref) above ref (Johnson-Cook), (rate/ref)^C below, 0 < C <= 1,
+    each linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the
+    process strain rate), where the secant G = sigma_p/rate stays bounded (2.10).
+    ``strain`` is the equivalent strain as a UFL expression; left out (as the flow's forms do until
+    the transported strain is coupled to them), H is taken at ``initial_strain``, which also gives
+    the scene's reference flow stress."""
+
+    rate_factor: str = "none"
+    m: float | None = None
+    C: float | None = None
+    reference_rate: float = 1.0
+    rate_floor: float | None = None
+    rate_floor_relative: float | None = None
+    initial_strain: float = 0.0
+    name: str | None = None
+    hardens: ClassVar[bool] = True
+
+    def resolve(self, process_rate: float):
+        """The law with its rate floor absolute (and relative to the process strain rate)."""
+        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
+        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
+
+    def check(self, section: str = "material") -> None:
+        """The rate factor's parameters (2.10), then the hardening curve's (_check_curve)."""
+        if self.rate_factor not in RATE_FACTORS:
+            raise SceneError(f"{section}.rate_factor",
+                             f"must be one of {', '.join(RATE_FACTORS)}; got {self.rate_factor!r}")
+        needed = {"none": None, "power": "m", "log": "C"}[self.rate_factor]
+        for key in ("m", "C"):
+            value = getattr(self, key)
+            if key != needed and value is not None:
+                raise SceneError(f"{section}.{key}", f"does not apply to rate_factor = "
+                                 f"{self.rate_factor!r}; leave it out")
+            if key == needed and not (value is not None and 0 < value <= 1):
+                raise SceneError(f"{section}.{key}", f"must lie in (0, 1] for (2.10) (sigma_p rising "
+                                 f"with the rate, sigma_p/rate falling); got {value}")
+        for key in ("reference_rate", "rate_floor"):
+            if not (getattr(self, key) is not None and getattr(self, key) > 0):
+                raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {getattr(self, key)}")
+        if not self.initial_strain >= 0:
+            raise SceneError(f"{section}.initial_strain",
+                             f"must be a finite number >= 0; got {self.initial_strain}")
+        self._check_curve(section)
+
+    @property
+    def _exponent(self) -> float:
+        return {"none": RATE_INDEPENDENT_EXPONENT, "power": self.m, "log": self.C}[self.rate_factor]
+
+    def _factor(self, rate, lib):
+        """r(rate) at rate >= rate_floor (``lib``: numpy or the UFL namespace below)."""
+        ratio = rate / self.reference_rate
+        power = ratio ** self._exponent
+        if self.rate_factor != "log":
+            return power
+        return lib.where(ratio > 1.0, 1.0 + self.C * lib.log(lib.maximum(ratio, 1.0)), power)
+
+    def rate_factor_value(self, rate: np.ndarray) -> np.ndarray:
+        """r(rate) (linear below the floor)."""
+        rate = np.asarray(rate, dtype=float)
+        floored = np.maximum(rate, self.rate_floor)
+        return self._factor(floored, np) * np.minimum(rate / self.rate_floor, 1.0)
+
+    def flow_stress(self, rate: np.ndarray, strain: np.ndarray | float | None = None) -> np.ndarray:
+        """sigma_p(rate, strain), the strain ``initial_strain`` when not given."""
+        strain = self.initial_strain if strain is None else strain
+        return self.hardening(np.asarray(strain, dtype=float), np) * self.rate_factor_value(rate)
+
+    def secant(self, rate: np.ndarray, strain: np.ndarray | float | None = None) -> np.ndarray:
+        """G = sigma_p/rate, bounded by its value at the rate floor."""
+        rate = np.maximum(np.asarray(rate, dtype=float), self.rate_floor)
+        return self.flow_stress(rate, strain) / rate
+
+    def secant_ufl(self, rate, strain=None):
+        """G(rate, strain) as a UFL expression (the strain a UFL expression, e.g. the transported
+        field, or the initial strain)."""
+        strain = self.initial_strain if strain is None else strain
+        floored = ufl.max_value(rate, self.rate_floor)
+        return self.hardening(strain, UFL) * self._factor(floored, UFL) / floored
+
+    def potential_ufl(self, rate, strain=None):
+        """W(rate) = int_0^rate sigma_p(s, strain) ds at the (frozen) strain: H(strain) times the
+        integral of the rate factor, quadratic below the floor."""
+        strain = self.initial_strain if strain is None else strain
+        f, ref, k = self.rate_floor, self.reference_rate, self._exponent
+        below = self._factor(f, np) / f * rate**2 / 2  # the linear part's integral
+        at_floor = self._factor(f, np) * f / 2
+
+        def power_integral(a, b):  # int_a^b (s/ref)^k ds
+            return ref * ((b / ref) ** (k + 1) - (a / ref) ** (k + 1)) / (k + 1)
+
+        if self.rate_factor == "log" and f < ref:
+            upper = ufl.conditional(
+                ufl.lt(rate, ref), power_integral(f, rate),
+                power_integral(f, ref) + (rate - ref) + self.C * (rate * ufl.ln(rate / ref) - rate + ref))
+        elif self.rate_factor == "log":  # the floor above ref: only the logarithmic branch
+            upper = (rate - f) + self.C * (rate * ufl.ln(rate / ref) - rate
+                                           - f * math.log(f / ref) + f)
+        else:
+            upper = power_integral(f, rate)
+        return self.hardening(strain, UFL) * ufl.conditional(ufl.lt(rate, f), below,
+                                                                at_floor + upper)
+
+
+class _UflMath:
+    """The numpy functions _Hardening uses, for UFL expressions."""
+
+    exp = staticmethod(ufl.exp)
+    log = staticmethod(ufl.ln)
+    maximum = staticmethod(ufl.max_value)
+
+    @staticmethod
+    def where(condition, a, b):
+        return ufl.conditional(condition, a, b)
+
+
+UFL = _UflMath()
+
+
+@dataclass(frozen=True)
+class HollomonLaw(_Hardening):
+    """Hollomon: H = K max(eps, strain_floor)^n; the floor (default 0.002, the 0.2 % offset strain)
+    keeps the yield stress of undeformed material positive, as (2.10) needs."""
+
+    K: float | None = None
+    n: float | None = None
+    strain_floor: float = 0.002
+    law: str = "hollomon"
+
+    def _check_curve(self, section: str) -> None:
+        _check_positive(section, "K", self.K)
+        if not (self.n is not None and 0 <= self.n < 1):
+            raise SceneError(f"{section}.n", f"must lie in [0, 1) (Hollomon's exponent); got {self.n}")
+        _check_positive(section, "strain_floor", self.strain_floor)
+
+    def hardening(self, strain, lib):
+        return self.K * lib.maximum(strain, self.strain_floor) ** self.n
+
+
+@dataclass(frozen=True)
+class SwiftLaw(_Hardening):
+    """Swift: H = K (prestrain + eps)^n, prestrain > 0."""
+
+    K: float | None = None
+    n: float | None = None
+    prestrain: float | None = None
+    law: str = "swift"
+
+    def _check_curve(self, section: str) -> None:
+        _check_positive(section, "K", self.K)
+        _check_positive(section, "prestrain", self.prestrain)
+        if not (self.n is not None and 0 <= self.n < 1):
+            raise SceneError(f"{section}.n", f"must lie in [0, 1) (Swift's exponent); got {self.n}")
+
+    def hardening(self, strain, lib):
+        return self.K * (self.prestrain + lib.maximum(strain, 0.0)) ** self.n
+
+
+@dataclass(frozen=True)
+class VoceLaw(_Hardening):
+    """Voce: H = saturation - (saturation - initial) exp(-eps/scale), 0 < initial <= saturation."""
+
+    initial: float | None = None
+    saturation: float | None = None
+    scale: float | None = None
+    law: str = "voce"
+
+    def _check_curve(self, section: str) -> None:
+        _check_positive(section, "initial", self.initial)
+        _check_positive(section, "scale", self.scale)
+        if not (self.saturation is not None and self.saturation >= self.initial):
+            raise SceneError(f"{section}.saturation", f"must be >= material.initial ({self.initial}): "
+                             f"Voce's curve rises to it; got {self.saturation}")
+
+    def hardening(self, strain, lib):
+        return self.saturation - (self.saturation - self.initial) * lib.exp(
+            -lib.maximum(strain, 0.0) / self.scale)
+
+
+def _check_positive(section: str, key: str, value: float | None) -> None:
+    if not (value is not None and value > 0):
+        raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {value}")
+
+
+LAWS = {"piecewise_power": PiecewisePowerLaw, "rate_power": PowerLaw, "hollomon": HollomonLaw,
+        "swift": SwiftLaw, "voce": VoceLaw}
+FlowLaw = PiecewisePowerLaw | PowerLaw | HollomonLaw | SwiftLaw | VoceLaw
+
+
+# Named materials a scene cites by ``material.name`` (values in MPa; any key overrides)
+MATERIALS: dict[str, dict] = {
+    "copper_annealed": {"law": "hollomon", "K": 315.0, "n": 0.54},
+    "low_carbon_steel_annealed": {"law": "hollomon", "K": 530.0, "n": 0.26},
+    "aluminium_1100_O": {"law": "hollomon", "K": 180.0, "n": 0.20},
+    "aluminium_6061_O": {"law": "hollomon", "K": 205.0, "n": 0.20},
+    "aluminium_2024_T4": {"law": "hollomon", "K": 690.0, "n": 0.16},
+    "stainless_304_annealed": {"law": "hollomon", "K": 1275.0, "n": 0.45},
+}
+MATERIAL_SOURCES = {name: "Kalpakjian & Schmid, Manufacturing Engineering and Technology, Table 2.3 "
+                    "(room temperature)" for name in MATERIALS}

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from .errors import SceneError
-from .material import LAWS, FlowLaw, PiecewisePowerLaw
+from .material import LAWS, MATERIALS, FlowLaw, PiecewisePowerLaw
 from .coordinates import SYMMETRIES
 from .die_profile import DieProfile, parametric_profile, polyline_profile, read_profile_csv
 from .msh import mesh_dimensions
@@ -617,6 +617,10 @@ class Scene:
         if self.solver.method == "newton" and self.discretisation.averaging != "quadrature":
             raise SceneError("solver.method", 'newton differentiates G at the integration points: it needs '
                              f'discretisation.averaging = "quadrature"; got {self.discretisation.averaging!r}')
+        if self.material.hardens and self.discretisation.averaging != "quadrature":
+            raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "
+                             'hardens with the strain, which lives at the integration points: it needs '
+                             f'"quadrature"; got {self.discretisation.averaging!r}')
         if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
             raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with discontinuous P1 "
                              f'pressure: it needs discretisation.element = "Q2"; got {self.discretisation.element!r}')
@@ -706,8 +710,21 @@ def key_name(name: Any) -> str:
     return name if isinstance(name, str) and name.isidentifier() else json.dumps(str(name))
 
 
-def _material(table: dict[str, Any], defaults: dict[str, Any]) -> FlowLaw:
+def _material(table: dict[str, Any], defaults: dict[str, Any], units: dict[str, Any]) -> FlowLaw:
+    """The flow law of [material]: ``law`` and its keys, or a named material (``name``, values in
+    MPa, so the scene's units.stress must be MPa) whose keys the table overrides."""
+    name = table.get("name")
+    if name is not None:
+        if not isinstance(name, str) or name not in MATERIALS:
+            raise SceneError("material.name", f"must be one of {', '.join(MATERIALS)}; got {name!r}")
+        if units.get("stress") != "MPa":
+            raise SceneError("material.name", f"{name} is given in MPa: the scene needs units.stress = "
+                             f'"MPa" (got {units.get("stress")!r})')
+        table = {**MATERIALS[name], **table}
     law = table.get("law", PiecewisePowerLaw.law)
+    if law == "power":
+        raise SceneError("material.law", '"power" is now "rate_power": sigma = A rate^n, a strain-rate '
+                         'law without hardening; strain hardening K eps^n is "hollomon"')
     if not isinstance(law, str) or law not in LAWS:
         raise SceneError("material.law", f"must be one of {', '.join(LAWS)}; got {law!r}")
     names = {f.name for f in dataclasses.fields(LAWS[law])}
@@ -738,7 +755,8 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     classes = {"geometry": geometry_class(kind, tables["geometry"]), "friction": Friction, "penalty": Penalty,
                "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units}
     built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
-    scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {})), **built)
+    scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {}),
+                                                      tables["units"]), **built)
     scene.resolve()
     scene.check()
     return scene

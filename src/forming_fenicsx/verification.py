@@ -37,7 +37,7 @@ def channel_errors(n: float, element: str, averaging: str, cells: int,
     mesh.topology.create_connectivity(1, 2)
     scene = scene_from_dict({
         "process": {"kind": "extrusion"}, "output": {"fields": False, "figures": False},
-        "material": {"law": "power", "A": A, "n": n, "rate_floor": 1e-10},
+        "material": {"law": "rate_power", "A": A, "n": n, "rate_floor": 1e-10},
         "discretisation": {"element": element, "averaging": averaging}, "penalty": {"d": 1e-7},
         "solver": {"method": "direct", "tolerance": 1e-8, "max_iterations": 500, "reference_strain_rate": 1.0}})
     none = np.array([], dtype=np.int32)
@@ -151,7 +151,7 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
         "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": symmetry, **({"entry_diameter": 2 * RADIAL["rho0"], "exit_diameter": 2}
                                               if symmetry == "axisymmetric" else {})},
-        "material": {"law": "power", "A": RADIAL["K"], "n": n},
+        "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "averaging": "quadrature"},
         "penalty": {"d_relative": 1e-7, "d_N_relative": 1e-4},  # O(d) below Q2's error on 16 cells
         "solver": {"method": method, "tolerance": 1e-8, "max_iterations": 300,
@@ -212,7 +212,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": rate * length}, "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": "axisymmetric"},
-        "material": {"law": "power", "A": RADIAL["K"], "n": n},
+        "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "formulation": formulation,
                            "averaging": "quadrature" if method == "newton" else "nodes"},
         "penalty": {"d_relative": 1e-6},
