@@ -94,8 +94,10 @@ class FlowProblem:
         self.dx, self.dx_vol, self.ds, self.n = m.dx, m.dx_vol, m.ds, m.n
         self.full_degree, self.volumetric_degree = m.full_degree, m.volumetric_degree
         self._apart_degree = m.apart_degree
+        self.frozen: list[FrozenCoefficient] = []
+        self.strain = None  # the equivalent strain of a hardening law (strain_transport.py)
         self.state = SecantState(self.V, self.coordinates, scene.material, disc.averaging,
-                                 self.full_degree)
+                                 self.full_degree, self.strain)
         self.u_state = self.state.u
 
         self.has_contact = "gamma3_contact" in self.roles
@@ -106,7 +108,6 @@ class FlowProblem:
         if self.has_contact and scene.penalty.augmented:
             self.multiplier = contact.ContactMultiplier(self.u, self.n, scene.penalty.d_N,
                                                         self.ds_contact, self.full_degree)
-        self.frozen: list[FrozenCoefficient] = []
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction:
@@ -179,7 +180,7 @@ class FlowProblem:
     def flow_stress(self, u):
         """sigma_p(rate(u)) of the material law, a UFL expression."""
         rate = self.equivalent_strain_rate(u)
-        return self.scene.material.secant_ufl(rate) * rate
+        return self.scene.material.secant_ufl(rate, self.strain) * rate
 
     def after_solve(self) -> None:
         """Velocity (and pressure) from the solution of a linear system."""

@@ -63,12 +63,13 @@ class PiecewisePowerLaw:
         """The rate below which the secant is constant (rate1 of (4.5))."""
         return self.rate1
 
-    def secant_ufl(self, rate):
-        """G(rate) of (4.5) as a UFL expression, for evaluation at quadrature points."""
+    def secant_ufl(self, rate, strain=None):
+        """G(rate) of (4.5) as a UFL expression, for evaluation at quadrature points (no strain
+        dependence: ``strain`` is accepted as every law's is)."""
         clipped = ufl.min_value(ufl.max_value(rate, self.rate1), self.rate2)
         return self.A * clipped ** (self.alpha - 1.0)
 
-    def potential_ufl(self, rate):
+    def potential_ufl(self, rate, strain=None):
         """W(rate) = int_0^rate sigma_p(s) ds of (4.5), whose derivative is sigma_p: the dissipation
         potential minimised by the solution (the energy of the Newton line search)."""
         g1, g2 = self.A * self.rate1 ** (self.alpha - 1.0), self.A * self.rate2 ** (self.alpha - 1.0)
@@ -125,11 +126,11 @@ class PowerLaw:
         """G(rate) = sigma_p/rate = A*max(rate, rate_floor)**(n-1)."""
         return self.A * np.maximum(np.asarray(rate, dtype=float), self.rate_floor) ** (self.n - 1.0)
 
-    def secant_ufl(self, rate):
-        """G(rate) as a UFL expression, for evaluation at quadrature points."""
+    def secant_ufl(self, rate, strain=None):
+        """G(rate) as a UFL expression, for evaluation at quadrature points (no strain dependence)."""
         return self.A * ufl.max_value(rate, self.rate_floor) ** (self.n - 1.0)
 
-    def potential_ufl(self, rate):
+    def potential_ufl(self, rate, strain=None):
         """W(rate) = int_0^rate sigma_p(s) ds (quadratic below rate_floor)."""
         g = self.A * self.rate_floor ** (self.n - 1.0)
         w1 = g * self.rate_floor**2 / 2

@@ -84,12 +84,13 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
         return ufl.sqrt(2.0 / 3.0 * c.deviatoric_product(e, e) + floor**2)
 
     def stress(w):
-        return 2.0 / 3.0 * material.secant_ufl(rate(w)) * c.deviatoric(c.strain_rate(w))
+        return (2.0 / 3.0 * material.secant_ufl(rate(w), problem.strain)
+                * c.deviatoric(c.strain_rate(w)))
 
     def secant_and_coupling(w):
         """G and (G'/G)/rate at w: d tau = 2/3 G e'(dw) + coupling e'(w):e'(dw) 2/3 tau."""
         r = ufl.variable(rate(w))
-        g = material.secant_ufl(r)
+        g = material.secant_ufl(r, problem.strain)
         return g, ufl.diff(g, r) / g / r
 
     # G and (G'/G)/rate at u, evaluated at the Gauss points once per step (tangent_update, before the
@@ -99,7 +100,7 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     e, e_du, e_v = c.strain_rate(u), c.strain_rate(du), c.strain_rate(v)
     symmetric_coupling = (c.deviatoric_product(e, e_du) * ufl.inner(dual, e_v)
                           + c.deviatoric_product(e, e_v) * ufl.inner(dual, e_du)) / 3.0  # 2/3 of the mean
-    energy = material.potential_ufl(rate(u)) * problem.dx
+    energy = material.potential_ufl(rate(u), problem.strain) * problem.dx
     operator = (2.0 / 3.0 * g * c.deviatoric_product(e_du, e_v) + coupling * symmetric_coupling) * problem.dx
     if problem.mixed:
         operator -= (dp * c.divergence(v) + q * c.divergence(du)) * problem.dx
@@ -130,7 +131,7 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     # |s| of the 3-D deviator: in plane strain the held 2x2 tensor's out-of-plane part is -tr; the
     # axisymmetric 3x3 deviator has zero trace
     equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
-    cap = material.secant_ufl(rate(u)) * rate(u)
+    cap = material.secant_ufl(rate(u), problem.strain) * rate(u)
     capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
     points = quadrature_points(problem.mesh, problem.full_degree)
     # a factor that carries the mesh: a Newtonian law's G and G' are constants, which UFL gives no domain

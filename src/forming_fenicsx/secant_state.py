@@ -17,13 +17,15 @@ class SecantState:
     as a Function of element means ("centres") or vertex means ("nodes": bilinear in between keeps
     G > 0 everywhere; Q2 nodal values would not) of the projected equivalent strain rate."""
 
-    def __init__(self, space, coordinates: CoordinateSystem, material, averaging: str, degree: int):
+    def __init__(self, space, coordinates: CoordinateSystem, material, averaging: str, degree: int,
+                 strain=None):
         mesh = space.mesh
         self.material = material
         self.u = dolfinx.fem.Function(space)
         rate = coordinates.equivalent_strain_rate(self.u)
         self._uniform = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
-        self._quadrature = material.secant_ufl(rate) if averaging == "quadrature" else None
+        # the strain (a hardening law's UFL field) only with "quadrature", as the scene checks
+        self._quadrature = material.secant_ufl(rate, strain) if averaging == "quadrature" else None
         if self._quadrature is None:
             averaging_space = (function_space(mesh, "DP", 0) if averaging == "centres"
                                else function_space(mesh, "P", 1))
