@@ -19,6 +19,7 @@ from .boundary_filter import BoundaryFilter
 from .coordinates import CoordinateSystem
 from .fields import FlowFields
 from .frozen import FrozenCoefficient, FrozenVelocity
+from .strain_transport import StrainField
 from .geometry import FormingMesh
 from .measures import Measures
 from .roles import ROLES
@@ -95,7 +96,16 @@ class FlowProblem:
         self.full_degree, self.volumetric_degree = m.full_degree, m.volumetric_degree
         self._apart_degree = m.apart_degree
         self.frozen: list[FrozenCoefficient] = []
-        self.strain = None  # the equivalent strain of a hardening law (strain_transport.py)
+        # the equivalent strain of a hardening law, transported (strain_transport.py) and frozen
+        # with the other coefficients; none for a law of the rate alone
+        self.strain_field: StrainField | None = None
+        self.strain = None
+        if scene.material.hardens:
+            self.strain_field = StrainField(self.u, self.coordinates, scene.material.initial_strain,
+                                            disc.degree, self.full_degree)
+            self.strain_field.eps.x.array[:] = scene.material.initial_strain
+            self.frozen.append(self.strain_field)
+            self.strain = self.strain_field.eps
         self.state = SecantState(self.V, self.coordinates, scene.material, disc.averaging,
                                  self.full_degree, self.strain)
         self.u_state = self.state.u
@@ -289,6 +299,12 @@ class FlowProblem:
     def frozen_change(self, u: dolfinx.fem.Function) -> float:
         """The largest relative change freezing the coefficients at u would make (0 without any)."""
         return max((coefficient.change(u) for coefficient in self.frozen), default=0.0)
+
+    def coupled_settled(self, u: dolfinx.fem.Function, tolerance: float) -> bool:
+        """Whether the coupled fields (the transported strain) would change by less than
+        ``tolerance`` when frozen at u: an iteration whose velocity increment is below delta has
+        not converged while they still move (the velocity is insensitive to some of their modes)."""
+        return self.strain_field is None or self.strain_field.change(u) < tolerance
 
     def contact_settled(self, increment: float) -> bool:
         """After an iterate taken in full: the augmented contact's multiplier update

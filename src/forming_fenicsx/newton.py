@@ -303,7 +303,8 @@ class NewtonSolver(SecantSolver):
             # cannot judge it, and the step is as good as taken)
             full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
-            if increment < settings.tolerance and settled and self._balanced(result):
+            if (increment < settings.tolerance and settled
+                    and problem.coupled_settled(problem.u, settings.tolerance) and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "

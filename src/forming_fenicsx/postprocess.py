@@ -175,6 +175,65 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
             "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle, g.symmetry)}
 
 
+def _outflow_weight(problem: FlowProblem):
+    """u.n where the flow leaves the workpiece (at more than 30 degrees to the boundary), else 0."""
+    leaving = ufl.dot(problem.u, problem.n)
+    return ufl.conditional(ufl.gt(leaving, 0.5 * ufl.sqrt(ufl.dot(problem.u, problem.u))), leaving, 0.0)
+
+
+def mean_exit_strain(problem: FlowProblem) -> float:
+    """The flux-weighted mean equivalent strain leaving the workpiece, int eps u.n / int u.n over the
+    outflow (the mean strain of the product)."""
+    weight = _outflow_weight(problem)
+    return _integrate(problem, problem.strain * weight * problem.ds) / _integrate(
+        problem, weight * problem.ds)
+
+
+def product_flow_stress(problem: FlowProblem) -> float:
+    """The drawn product's flow stress at the process strain rate: at its mean exit strain for a
+    hardening law, the scene's reference flow stress otherwise."""
+    scene = problem.scene
+    if problem.strain is None:
+        return scene.reference_flow_stress
+    return float(scene.material.flow_stress([scene.reference_strain_rate], mean_exit_strain(problem))[0])
+
+
+def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
+    """With a hardening law: the mean exit strain, the ideal strain ln(A0/A1) (2/sqrt3 ln(h0/h1) in
+    plane strain), the redundant-work factor (exit strain gained over the ideal), and the mean flow
+    stress Ybar = P / (Q (eps_exit - eps_in)): the plastic work rate P = int sigma rate over the
+    throughput Q and the strain gained, as the ideal-work formulas use it."""
+    if problem.strain is None:
+        return {}
+    scene, g = problem.scene, problem.scene.geometry
+    exit_strain = mean_exit_strain(problem)
+    gained = exit_strain - scene.material.initial_strain
+    ratio = g.entry_thickness / g.exit_thickness
+    ideal = 2 * math.log(ratio) if g.axisymmetric else 2 / math.sqrt(3) * math.log(ratio)
+    rate = problem.equivalent_strain_rate(problem.u)
+    work = _integrate(problem, problem.flow_stress(problem.u) * rate * problem.dx)
+    return {"mean_exit_strain": exit_strain, "ideal_strain": ideal,
+            "redundant_work_factor": gained / ideal,
+            "mean_flow_stress": work / (throughput(problem) * gained) if gained > 0 else math.nan,
+            "product_flow_stress": product_flow_stress(problem)}
+
+
+def exit_strain_profile(problem: FlowProblem, points: int = 41) -> dict[str, np.ndarray] | None:
+    """The equivalent strain across the product (the hardness profile): y from the axis to the
+    surface on the section half an exit thickness before the workpiece's end (rank 0; None
+    elsewhere and without a hardening law)."""
+    if problem.strain is None:
+        return None
+    from .sections import values_at
+
+    g = problem.scene.geometry
+    x = g.length - 0.5 * g.thinnest
+    y = np.linspace(0.0, g.thinnest * (1 - 1e-9), points)
+    eps = values_at(problem, problem.strain, np.column_stack([np.full(points, x), y]),
+                    problem.scene.discretisation.degree)
+    return {"y": y, "equivalent_strain": eps} if problem.comm.rank == 0 else None
+
+
 def free_surface_crossing(problem: FlowProblem) -> float:
     """Volume crossing the free strip surfaces (Gamma2, Gamma4 facets whose normal is mostly along y),
     in or out, relative to the flux through Gamma1: zero for a steady state whose free surfaces are
@@ -286,11 +345,12 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
             process.update({**die_scalars(problem), **pass_shape(problem)})
     else:
         stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
-        strength = problem.coordinates.tensile_yield_factor * problem.scene.reference_flow_stress
+        strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
         process = {"drawing_force": force, "drawing_stress": stress, "product_yield_ratio": stress / strength,
                    **die_scalars(problem), **pass_shape(problem)}
     return {
         **process,
+        **hardening_scalars(problem),
         "die_force_x": die_normal + die_friction,
         "die_separation_force": die_separation_force(problem),
         "die_normal_force_x": die_normal,
@@ -309,7 +369,8 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
 
 
 def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
-    """Velocity, equivalent strain rate, hydrostatic pressure and secant viscosity at the mesh nodes.
+    """Velocity, equivalent strain rate, hydrostatic pressure and secant viscosity at the mesh nodes
+    (and, with a hardening law, the equivalent strain and the flow stress).
 
     Scalars are nodal means (lumped projections) on Lagrange elements of the geometry degree, the
     form XDMF and ParaView read.
@@ -325,6 +386,9 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
         "hydrostatic_pressure": (problem.hydrostatic_stress(), problem.volumetric_degree),
         "secant_viscosity": (problem.secant_coefficient(), problem.full_degree),
     }
+    if problem.strain is not None:  # a hardening law: its strain and flow stress
+        sources["equivalent_strain"] = (problem.strain, problem.full_degree)
+        sources["flow_stress"] = (problem.flow_stress(problem.u), problem.full_degree)
     fields = [velocity]
     for name, (expr, quadrature) in sources.items():
         target = dolfinx.fem.Function(space, name=name)

@@ -23,7 +23,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from .coordinates import tensile_yield_factor
 from .scene import D_N_RELATIVE, D_RELATIVE, Scene
 from .solvers import ILL_CONDITIONED
 
@@ -95,8 +94,7 @@ def drawability(summary: dict[str, Any], scene: Scene) -> list[Finding]:
                              "process. Reduce the reduction, the die angle, the friction or the back force",
                              failure=True))
     if scene.process.kind == "drawing":
-        stress = summary["drawing_stress"]
-        ratio = stress / (tensile_yield_factor(scene.geometry.axisymmetric) * scene.reference_flow_stress)
+        stress, ratio = summary["drawing_stress"], summary["product_yield_ratio"]
         finding = _graded("drawability", ratio, DRAWING_LIMIT,
                           f"the drawing stress {stress:.4g} is {ratio:.3f} times the yield stress in tension "
                           f"of the drawn product ({'sigma0, a round bar' if scene.geometry.axisymmetric else '2k, a plane-strain strip'}): ")

@@ -136,14 +136,34 @@ def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> For
     return FormingMesh(mesh, facet_tags, roles, [])
 
 
+def radial_hardening_stress_rise(symmetry: str, law, points: int = 200) -> float:
+    """sigma_rr(rho1) - sigma_rr(rho0) of the exact flow between the caps of RADIAL for any flow law
+    sigma(rate, eps) (a hardening law's initial_strain on the entry cap): int_rho1^rho0 c sigma/rho
+    d rho by Gauss-Legendre, with the cone's c = 2, rate = 2U/rho^3, eps = eps0 + 2 ln(rho0/rho),
+    or the wedge's c = 2/sqrt3, rate = (2/sqrt3) U/r^2, eps = eps0 + (2/sqrt3) ln(r0/r)."""
+    U, rho0, rho1 = RADIAL["U"], RADIAL["rho0"], RADIAL["rho1"]
+    nodes, weights = np.polynomial.legendre.leggauss(points)
+    rho = rho1 + (rho0 - rho1) * (nodes + 1) / 2
+    if symmetry == "axisymmetric":
+        factor, rate = 2.0, 2 * U / rho**3
+    else:
+        factor, rate = 2 / np.sqrt(3), 2 / np.sqrt(3) * U / rho**2
+    strain = law.initial_strain + factor * np.log(rho0 / rho)
+    sigma = law.flow_stress(rate, strain)
+    return float((rho0 - rho1) / 2 * np.sum(weights * factor * sigma / rho))
+
+
 def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
-                comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, float]:
+                comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None) -> dict[str, float]:
     """Drawing through the smooth cone or wedge: the exit cap pulled at the exact velocity, the entry
     cap free (the exact sigma_rr is taken zero there), the wall a frictionless die, the Norton law
-    sigma = K rate^n. Returns the L2 and H1-seminorm velocity errors (relative to the exact field's
-    norms) and the mean axial stress on the exit cap, F / (pi rho1^2 sin^2 alpha) (cone) or
-    F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise)."""
-    from .postprocess import reaction_on
+    sigma = K rate^n (or the scene ``material`` given, e.g. a hardening law, whose strain is then
+    transported and coupled). Returns the L2 and H1-seminorm velocity errors (relative to the exact
+    field's norms) and the mean axial stress on the exit cap, F / (pi rho1^2 sin^2 alpha) (cone) or
+    F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise, or
+    radial_hardening_stress_rise), and with a hardening law the mean exit strain beside the exact
+    eps0 + ln(A0/A1)."""
+    from .postprocess import mean_exit_strain, reaction_on
 
     forming_mesh = sector_mesh(cells, int(element[1]), comm)
     scene = scene_from_dict({
@@ -151,7 +171,7 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
         "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": symmetry, **({"entry_diameter": 2 * RADIAL["rho0"], "exit_diameter": 2}
                                               if symmetry == "axisymmetric" else {})},
-        "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
+        "material": material or {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "averaging": "quadrature"},
         "penalty": {"d_relative": 1e-7, "d_N_relative": 1e-4},  # O(d) below Q2's error on 16 cells
         "solver": {"method": method, "tolerance": 1e-8, "max_iterations": 300,
@@ -178,11 +198,19 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
 
     alpha, rho1 = np.radians(RADIAL["alpha"]), RADIAL["rho1"]
     area = problem.coordinates.section(rho1 * np.sin(alpha))
-    return {"l2": norm(ufl.inner(error, error)) / norm(ufl.inner(exact, exact)),
-            "h1": norm(ufl.inner(ufl.grad(error), ufl.grad(error))) / norm(ufl.inner(ufl.grad(exact),
-                                                                                   ufl.grad(exact))),
-            "exit_stress": reaction_on(problem, "gamma1_velocity", 0) / area,
-            "exact_exit_stress": radial_stress_rise(symmetry, n), "linear_solves": result.linear_solves}
+    law = scene.material
+    found = {"l2": norm(ufl.inner(error, error)) / norm(ufl.inner(exact, exact)),
+             "h1": norm(ufl.inner(ufl.grad(error), ufl.grad(error))) / norm(ufl.inner(ufl.grad(exact),
+                                                                                    ufl.grad(exact))),
+             "exit_stress": reaction_on(problem, "gamma1_velocity", 0) / area,
+             "exact_exit_stress": (radial_hardening_stress_rise(symmetry, law) if law.hardens
+                                   else radial_stress_rise(symmetry, n)),
+             "linear_solves": result.linear_solves, "outer_iterations": result.outer_iterations}
+    if law.hardens:
+        factor = 2.0 if symmetry == "axisymmetric" else 2 / np.sqrt(3)
+        found["exit_strain"] = mean_exit_strain(problem)
+        found["exact_exit_strain"] = law.initial_strain + factor * np.log(RADIAL["rho0"] / rho1)
+    return found
 
 
 def homogeneous_extension(element: str, method: str, formulation: str = "penalty",
@@ -212,7 +240,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": rate * length}, "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": "axisymmetric"},
-        "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
+        "material": material or {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "formulation": formulation,
                            "averaging": "quadrature" if method == "newton" else "nodes"},
         "penalty": {"d_relative": 1e-6},
