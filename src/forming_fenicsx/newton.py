@@ -304,9 +304,13 @@ class NewtonSolver(SecantSolver):
             full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
             if (increment < settings.tolerance and settled
-                    and problem.coupled_settled(problem.u, settings.tolerance) and self._balanced(result)):
+                    and problem.coupled_settled(problem.u, settings.strain_tolerance) and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
+        hint = ("; with a nearly rate-independent hardening law in plane strain, Newton's per-step "
+                "strain update may not settle: try solver.method = \"direct\" or a rate factor"
+                if problem.strain_field is not None else "")
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
-                         f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})")
+                         f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})"
+                         f"{hint}")
         return result
