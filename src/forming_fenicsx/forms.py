@@ -14,7 +14,7 @@ import dolfinx.fem.petsc
 import ufl
 from petsc4py import PETSc
 
-from . import contact, friction
+from . import contact, friction, strain_profile
 from .boundary_filter import BoundaryFilter
 from .coordinates import CoordinateSystem
 from .fields import FlowFields
@@ -101,9 +101,18 @@ class FlowProblem:
         self.strain_field: StrainField | None = None
         self.strain = None
         if scene.material.hardens:
-            self.strain_field = StrainField(self.u, self.coordinates, scene.material.initial_strain,
-                                            disc.degree, self.full_degree)
-            self.strain_field.eps.x.array[:] = scene.material.initial_strain
+            inflow = scene.material.initial_strain
+            if scene.material.initial_strain_file is not None:  # a profile across the entry
+                inflow = strain_profile.inflow_strain(
+                    mesh, disc.degree, strain_profile.read_strain_profile(
+                        scene.material.initial_strain_file, "material.initial_strain_file"),
+                    scene.geometry.entry_thickness / 2)
+            self.strain_field = StrainField(self.u, self.coordinates, inflow, disc.degree,
+                                            self.full_degree)
+            if isinstance(inflow, float):
+                self.strain_field.eps.x.array[:] = inflow
+            else:
+                self.strain_field.eps.interpolate(inflow)
             self.frozen.append(self.strain_field)
             self.strain = self.strain_field.eps
         self.state = SecantState(self.V, self.coordinates, scene.material, disc.averaging,

@@ -17,6 +17,7 @@ import ufl
 
 from .errors import SceneError
 from .relative import resolve_pair
+from .strain_profile import read_strain_profile
 
 RATE_FLOOR_RELATIVE = 1e-6  # the power law's default rate floor, relative to the process strain rate
 
@@ -154,9 +155,10 @@ class _Hardening:
     - ``"log"``: r = 1 + C ln(rate/ref) above ref (Johnson-Cook), (rate/ref)^C below, 0 < C <= 1,
     each linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the
     process strain rate), where the secant G = sigma_p/rate stays bounded (2.10).
-    ``strain`` is the equivalent strain as a UFL expression; left out (as the flow's forms do until
-    the transported strain is coupled to them), H is taken at ``initial_strain``, which also gives
-    the scene's reference flow stress."""
+    ``strain`` is the equivalent strain as a UFL expression (the transported field); left out, H is
+    taken at ``initial_strain``, which also gives the scene's reference flow stress. The strain
+    flowing in is ``initial_strain``, or a profile across the entry section read from
+    ``initial_strain_file`` (strain_profile.py: a previous pass's exit_strain.csv)."""
 
     rate_factor: str = "none"
     m: float | None = None
@@ -165,6 +167,7 @@ class _Hardening:
     rate_floor: float | None = None
     rate_floor_relative: float | None = None
     initial_strain: float = 0.0
+    initial_strain_file: str | None = None
     name: str | None = None
     hardens: ClassVar[bool] = True
 
@@ -193,6 +196,11 @@ class _Hardening:
         if not self.initial_strain >= 0:
             raise SceneError(f"{section}.initial_strain",
                              f"must be a finite number >= 0; got {self.initial_strain}")
+        if self.initial_strain_file is not None:
+            if self.initial_strain != 0:
+                raise SceneError(f"{section}.initial_strain", "give the inflow strain as a number or "
+                                 f"as {section}.initial_strain_file (a profile), not both")
+            read_strain_profile(self.initial_strain_file, f"{section}.initial_strain_file")
         self._check_curve(section)
 
     @property

@@ -113,3 +113,28 @@ def write_die_plot(profile: dict, path: Path, title: str, units: Units) -> Path:
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
+
+
+def write_strain_profile_plot(profile: dict, path: Path, title: str, units: Units,
+                              ideal: float | None = None) -> Path:
+    """exit_strain.png: the equivalent strain across the product against y (the hardness profile),
+    with the ideal strain ln(A0/A1) gained for comparison."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(profile["y"], profile["equivalent_strain"], "b.-", label="FE equivalent strain")
+    if ideal is not None:
+        ax.axhline(ideal, color="k", linestyle="--", label=f"entry strain + ideal ln(A0/A1) = {ideal:.4g}")
+    ax.set_xlabel(units.labelled("y, from the axis to the surface of the product", "length"))
+    ax.set_ylabel("equivalent strain")
+    ax.set_title(f"{title}: strain across the product")
+    ax.set_ylim(bottom=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path

@@ -175,16 +175,18 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
             "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle, g.symmetry)}
 
 
-def _outflow_weight(problem: FlowProblem):
-    """u.n where the flow leaves the workpiece (at more than 30 degrees to the boundary), else 0."""
-    leaving = ufl.dot(problem.u, problem.n)
-    return ufl.conditional(ufl.gt(leaving, 0.5 * ufl.sqrt(ufl.dot(problem.u, problem.u))), leaving, 0.0)
+def _flux_weight(problem: FlowProblem, leaving: bool):
+    """|u.n| where the flow leaves (or enters) the workpiece at more than 30 degrees to the
+    boundary, else 0 (die walls and free surfaces, which the flow follows, carry none)."""
+    flux = ufl.dot(problem.u, problem.n) if leaving else -ufl.dot(problem.u, problem.n)
+    return ufl.conditional(ufl.gt(flux, 0.5 * ufl.sqrt(ufl.dot(problem.u, problem.u))), flux, 0.0)
 
 
-def mean_exit_strain(problem: FlowProblem) -> float:
-    """The flux-weighted mean equivalent strain leaving the workpiece, int eps u.n / int u.n over the
-    outflow (the mean strain of the product)."""
-    weight = _outflow_weight(problem)
+def mean_strain_through(problem: FlowProblem, leaving: bool = True) -> float:
+    """The flux-weighted mean equivalent strain leaving (or entering) the workpiece,
+    int eps |u.n| / int |u.n| over the outflow (inflow): the mean strain of the product (of the
+    stock)."""
+    weight = _flux_weight(problem, leaving)
     return _integrate(problem, problem.strain * weight * problem.ds) / _integrate(
         problem, weight * problem.ds)
 
@@ -195,24 +197,25 @@ def product_flow_stress(problem: FlowProblem) -> float:
     scene = problem.scene
     if problem.strain is None:
         return scene.reference_flow_stress
-    return float(scene.material.flow_stress([scene.reference_strain_rate], mean_exit_strain(problem))[0])
+    return float(scene.material.flow_stress([scene.reference_strain_rate],
+                                            mean_strain_through(problem))[0])
 
 
 def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
-    """With a hardening law: the mean exit strain, the ideal strain ln(A0/A1) (2/sqrt3 ln(h0/h1) in
+    """With a hardening law: the mean entry and exit strains, the ideal strain ln(A0/A1) (2/sqrt3 ln(h0/h1) in
     plane strain), the redundant-work factor (exit strain gained over the ideal), and the mean flow
     stress Ybar = P / (Q (eps_exit - eps_in)): the plastic work rate P = int sigma rate over the
     throughput Q and the strain gained, as the ideal-work formulas use it."""
     if problem.strain is None:
         return {}
-    scene, g = problem.scene, problem.scene.geometry
-    exit_strain = mean_exit_strain(problem)
-    gained = exit_strain - scene.material.initial_strain
+    g = problem.scene.geometry
+    exit_strain, entry_strain = mean_strain_through(problem), mean_strain_through(problem, False)
+    gained = exit_strain - entry_strain
     ratio = g.entry_thickness / g.exit_thickness
     ideal = 2 * math.log(ratio) if g.axisymmetric else 2 / math.sqrt(3) * math.log(ratio)
     rate = problem.equivalent_strain_rate(problem.u)
     work = _integrate(problem, problem.flow_stress(problem.u) * rate * problem.dx)
-    return {"mean_exit_strain": exit_strain, "ideal_strain": ideal,
+    return {"mean_entry_strain": entry_strain, "mean_exit_strain": exit_strain, "ideal_strain": ideal,
             "redundant_work_factor": gained / ideal,
             "mean_flow_stress": work / (throughput(problem) * gained) if gained > 0 else math.nan,
             "product_flow_stress": product_flow_stress(problem)}

@@ -17,9 +17,10 @@ from .forms import FlowProblem
 from .geometry import build_mesh
 from .newton import NewtonSolver
 from .output import load_velocity, save_velocity, write_die_profile, write_fields, write_history, write_summary
-from .plotting import write_die_plot, write_figures
-from .postprocess import die_profile, force_balance, output_fields, scalars
+from .plotting import write_die_plot, write_figures, write_strain_profile_plot
+from .postprocess import die_profile, exit_strain_profile, force_balance, output_fields, scalars
 from .sanity import check_run
+from .strain_profile import write_strain_profile
 from .scene import Scene
 from .solvers import SecantSolver, SolveResult
 
@@ -141,6 +142,13 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     if scene.output.figures:
         write_figures(problem, out, title or scene.process.kind)
     profile = die_profile(problem)
+    strain = exit_strain_profile(problem)
+    if comm.rank == 0 and strain is not None:  # a hardening law: the product's strain profile
+        write_strain_profile(out / "exit_strain.csv", strain["y"], strain["equivalent_strain"],
+                             scene.units.label("length"))
+        if scene.output.figures:
+            write_strain_profile_plot(strain, out / "exit_strain.png", title or scene.process.kind,
+                                      scene.units, summary["mean_entry_strain"] + summary["ideal_strain"])
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:

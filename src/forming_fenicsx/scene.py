@@ -25,6 +25,7 @@ from typing import Any, ClassVar
 
 from .errors import SceneError
 from .material import LAWS, MATERIALS, FlowLaw, PiecewisePowerLaw
+from .strain_profile import check_section, read_strain_profile
 from .coordinates import SYMMETRIES
 from .die_profile import DieProfile, parametric_profile, polyline_profile, read_profile_csv
 from .msh import mesh_dimensions
@@ -627,6 +628,9 @@ class Scene:
             raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "
                              'hardens with the strain, which lives at the integration points: it needs '
                              f'"quadrature"; got {self.discretisation.averaging!r}')
+        if self.material.hardens and self.material.initial_strain_file is not None:
+            check_section(read_strain_profile(self.material.initial_strain_file, "material.initial_strain_file"),
+                          self.geometry.entry_thickness / 2, "material.initial_strain_file")
         if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
             raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with discontinuous P1 "
                              f'pressure: it needs discretisation.element = "Q2"; got {self.discretisation.element!r}')
@@ -799,8 +803,8 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
 
 
 def read_scene_data(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
-    """Read a scene file and apply overrides, without validating; a relative mesh_file or
-    die_profile_file is taken relative to the scene file."""
+    """Read a scene file and apply overrides, without validating; a relative mesh_file,
+    die_profile_file or initial_strain_file is taken relative to the scene file."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())
@@ -813,6 +817,9 @@ def read_scene_data(path: str | Path, overrides: list[str] | None = None) -> dic
     for key in ("mesh_file", "die_profile_file"):  # relative to the scene file
         if isinstance(geometry, dict) and isinstance(geometry.get(key), str):
             geometry[key] = str(path.parent / geometry[key])
+    material = data.get("material")
+    if isinstance(material, dict) and isinstance(material.get("initial_strain_file"), str):
+        material["initial_strain_file"] = str(path.parent / material["initial_strain_file"])
     return data
 
 

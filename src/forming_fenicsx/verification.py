@@ -163,7 +163,7 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
     F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise, or
     radial_hardening_stress_rise), and with a hardening law the mean exit strain beside the exact
     eps0 + ln(A0/A1)."""
-    from .postprocess import mean_exit_strain, reaction_on
+    from .postprocess import mean_strain_through, reaction_on
 
     forming_mesh = sector_mesh(cells, int(element[1]), comm)
     scene = scene_from_dict({
@@ -208,7 +208,7 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
              "linear_solves": result.linear_solves, "outer_iterations": result.outer_iterations}
     if law.hardens:
         factor = 2.0 if symmetry == "axisymmetric" else 2 / np.sqrt(3)
-        found["exit_strain"] = mean_exit_strain(problem)
+        found["exit_strain"] = mean_strain_through(problem)
         found["exact_exit_strain"] = law.initial_strain + factor * np.log(RADIAL["rho0"] / rho1)
     return found
 

@@ -1,0 +1,93 @@
+"""The equivalent strain across a section, y from the axis (or the strip's mid-plane) to the surface:
+the "hardness profile" a hardening run writes for its product (exit_strain.csv), read back as the
+inflow strain of the next pass (``material.initial_strain_file``), so a pass schedule is a sequence
+of runs.
+
+File: CSV with the header ``y,equivalent_strain`` (units in brackets after a name are allowed, as
+the run writes them: ``y [mm]``), y rising from 0 to the half-size of the section.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+
+HEADER = ("y", "equivalent_strain")
+
+
+def _name(column: str) -> str:
+    """A column header without its unit: ``y [mm]`` -> ``y``."""
+    return column.split("[", 1)[0].strip().lower()
+
+
+def read_strain_profile(path: str | Path, key: str) -> np.ndarray:
+    """The (y, eps) rows of a strain-profile CSV, (N, 2). Refused, naming ``key`` and the row: a
+    missing file, another header, fewer than two rows, a value that is not a finite number, y not
+    rising from 0, or a negative strain."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(key, f"must name an existing CSV file of y,equivalent_strain rows; got "
+                              f"{str(path)!r}")
+    with path.open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    if not rows or tuple(_name(c) for c in rows[0]) != HEADER:
+        raise SceneError(key, f"{path.name}: the first row must be the header y,equivalent_strain")
+    points: list[list[float]] = []
+    for number, row in enumerate(rows[1:], start=2):
+        if not row or all(not c.strip() for c in row):
+            continue
+        try:
+            values = [float(c) for c in row]
+        except ValueError:
+            raise SceneError(key, f"{path.name} row {number}: not two numbers: {row}") from None
+        if len(values) != 2 or not all(math.isfinite(v) for v in values):
+            raise SceneError(key, f"{path.name} row {number}: need two finite numbers; got {row}")
+        if values[1] < 0:
+            raise SceneError(key, f"{path.name} row {number}: the strain {values[1]} must be >= 0")
+        if (not points and values[0] != 0) or (points and values[0] <= points[-1][0]):
+            raise SceneError(key, f"{path.name} row {number}: y = {values[0]} must rise from 0")
+        points.append(values)
+    if len(points) < 2:
+        raise SceneError(key, f"{path.name}: needs at least two rows; got {len(points)}")
+    return np.array(points)
+
+
+def check_section(profile: np.ndarray, half_size: float, key: str) -> None:
+    """The profile must span the entry section: its last y within 2 % of the entry half-size (a
+    previous pass's exit is this pass's entry)."""
+    if abs(profile[-1, 0] / half_size - 1) > 0.02:
+        raise SceneError(key, f"the profile spans y = 0 to {profile[-1, 0]:.6g}, the entry section "
+                              f"0 to {half_size:.6g}: it must be the strain across this entry (the "
+                              "previous pass's exit size is this pass's entry size)")
+
+
+def profile_values(profile: np.ndarray, y: np.ndarray, half_size: float) -> np.ndarray:
+    """The strain at heights y of a section of ``half_size``, linear between the rows, the profile
+    stretched to end where the section does (the sizes agree within 2 %, check_section)."""
+    return np.interp(y * profile[-1, 0] / half_size, profile[:, 0], profile[:, 1])
+
+
+def write_strain_profile(path: Path, y: np.ndarray, strain: np.ndarray, length_label: str) -> None:
+    """exit_strain.csv: y and the strain, the y header with the length unit when the scene has one."""
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow([f"y [{length_label}]" if length_label else "y", "equivalent_strain"])
+        for row in zip(y, strain, strict=True):
+            writer.writerow([f"{value:.8g}" for value in row])
+
+
+def inflow_strain(mesh, degree: int, profile: np.ndarray, half_size: float):
+    """The profile as a Lagrange Function of ``degree`` on the mesh, a function of y alone (the
+    inflow strain of strain_transport.py, and its first guess everywhere)."""
+    import dolfinx.fem
+
+    from .compat import function_space
+
+    target = dolfinx.fem.Function(function_space(mesh, "P", degree), name="inflow_strain")
+    y = target.function_space.tabulate_dof_coordinates()[:, 1]
+    target.x.array[:] = profile_values(profile, np.abs(y), half_size)
+    return target
