@@ -27,6 +27,14 @@ EXAMPLES = {
         ["discretisation.element=Q2", "discretisation.volumetric_integration=reduced"]),
 }
 DEFAULT_SIZES = {1: [0.25, 0.11], 2: [0.05, 0.025]}
+# --hardening: scenes with a hardening law, each run coupled and with the flow stress frozen at the
+# coupled run's mean (a rate-independent law of that flow stress): the cost of the transported strain
+HARDENING = {
+    "copper, annealed": ("copper_wire_pass.toml", []),
+    "copper, drawn before (eps 0.276)": ("copper_wire_pass.toml", ["material.initial_strain=0.276"]),
+    "aluminium 1100-O, rate factor 0.05": ("copper_wire_pass.toml", [
+        "material.name=aluminium_1100_O", "material.rate_factor=power", "material.m=0.05"]),
+}
 METHODS = ("direct", "modified", "newton")
 
 
@@ -38,7 +46,11 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     from .scene import read_scene_data, scene_from_dict
     from .study import exact_value
 
-    scene_file, quantity, settings = EXAMPLES[case["example"]]
+    if "hardening" in case:
+        scene_file, settings = HARDENING[case["hardening"]]
+        quantity = "drawing_stress"
+    else:
+        scene_file, quantity, settings = EXAMPLES[case["example"]]
     data = read_scene_data(DEMOS / scene_file, [
         *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
         f"solver.method={case['method']}", f"discretisation.formulation={case.get('formulation', 'penalty')}",
@@ -49,6 +61,8 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
         geometry["symmetry"] = "axisymmetric"
         for end in ("entry", "exit"):
             geometry[f"{end}_diameter"] = geometry.pop(f"{end}_thickness")
+    if case.get("material"):  # the flow stress frozen: another law in place of the scene's
+        data["material"] = case["material"]
     scene = scene_from_dict(data)
     summary = solve_scene(scene)[2]
     comm = MPI.COMM_WORLD
@@ -62,7 +76,37 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
             "factor_solve_per_solve_s": (split["factorisation"] + split["solve"]) / solves,
             "peak_memory_mb": peak, "quantity": quantity, "value": summary[quantity],
             "exact": exact_value(scene, quantity), "force_balance_residual": summary["force_balance_residual"],
-            "solve_error_estimate": summary["solve_error_estimate"]}
+            "solve_error_estimate": summary["solve_error_estimate"],
+            "mean_flow_stress": summary.get("mean_flow_stress")}
+
+
+def hardening_bench(ranks: int, mesh_size: float, repeat: int) -> list[dict[str, Any]]:
+    """Each HARDENING scene coupled, then with the flow stress frozen at the coupled run's mean
+    flow stress (law rate_power, exponent 1e-3: the rate factor "none" of the hardening laws);
+    the rows carry the coupled run's solves and time over the frozen run's."""
+    rows = []
+    for name in HARDENING:
+        case = {"hardening": name, "mesh_size": mesh_size, "method": "newton"}
+        coupled = median_run([_launch(case, ranks) for _ in range(repeat)])
+        frozen_law = {"law": "rate_power", "A": coupled["mean_flow_stress"], "n": 1e-3}
+        frozen = median_run([_launch({**case, "material": frozen_law}, ranks) for _ in range(repeat)])
+        for row, kind in ((coupled, "strain transported"), (frozen, "frozen at the mean")):
+            rows.append({**row, "flow_stress": kind,
+                         "solves_vs_frozen": row["linear_solves"] / frozen["linear_solves"],
+                         "time_vs_frozen": row["wall_time_s"] / frozen["wall_time_s"]})
+        print(f"{name}: {coupled['linear_solves']} solves {coupled['wall_time_s']:.2f} s coupled, "
+              f"{frozen['linear_solves']} solves {frozen['wall_time_s']:.2f} s frozen", flush=True)
+    return rows
+
+
+def hardening_table(rows: list[dict[str, Any]]) -> str:
+    return markdown_table("forming bench --hardening", [
+        "scene", "h", "ranks", "flow stress", "converged", "dofs", "linear solves", "wall s",
+        "wall s range", "drawing stress", "mean flow stress", "solves / frozen", "time / frozen"],
+        [[r["hardening"], r["mesh_size"], r["ranks"], r["flow_stress"], r["converged"], r["dofs"],
+          r["linear_solves"], f"{r['wall_time_s']:.2f}", _spread(r["wall_time_runs_s"]),
+          f"{r['value']:.5g}", f"{r['mean_flow_stress'] or float('nan'):.5g}",
+          f"{r['solves_vs_frozen']:.2f}", f"{r['time_vs_frozen']:.2f}"] for r in rows])
 
 
 def median_run(runs: list[dict[str, Any]]) -> dict[str, Any]:
@@ -148,6 +192,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=1,
                         help="run every case once per round, so many rounds, and keep each case's run of "
                              "median wall time")
+    parser.add_argument("--hardening", action="store_true",
+                        help="the hardening scenes instead of the examples: each coupled and with the "
+                             "flow stress frozen at its mean (the first --ranks and --sizes; h 0.06 mm)")
     parser.add_argument("--out", default="results/bench.json")
     args = parser.parse_args(argv)
     if args.repeat < 1:
@@ -162,6 +209,10 @@ def main(argv: list[str] | None = None) -> int:
     if "OMPI_COMM_WORLD_SIZE" in os.environ or "PMI_RANK" in os.environ:
         print("forming bench: run it without mpirun; --ranks sets the ranks of each case", file=sys.stderr)
         return 2
+    if args.hardening:
+        rows = hardening_bench(args.ranks[0], (args.sizes or [0.06])[0], args.repeat)
+        print(hardening_table(rows))
+        return _write(Path(args.out), rows)
     cases = [({"example": example, "mesh_size": size, "method": method, "formulation": formulation,
                "symmetry": symmetry, "set": args.set}, ranks)
              for example in args.examples for size in args.sizes or DEFAULT_SIZES[example]
@@ -178,7 +229,10 @@ def main(argv: list[str] | None = None) -> int:
     rows = [median_run(case_runs) for case_runs in runs]
     compare(rows)
     print(table(rows))
-    out = Path(args.out)
+    return _write(Path(args.out), rows)
+
+
+def _write(out: Path, rows: list[dict[str, Any]]) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(rows, indent=1))
     print(f"\nwritten {out}")
