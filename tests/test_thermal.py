@@ -43,7 +43,8 @@ def test_manufactured_orders(symmetry, degree):
     assert l2.min() > (1.7 if degree == 1 else 2.85), l2
     assert h1.min() > degree - 0.05, h1
     assert abs(runs[-1]["residual"]) < 1e-5
-    assert runs[-1]["friction_to_die"] == pytest.approx(runs[-1]["friction_to_workpiece"] * 0.4 / 0.6)
+    balance = runs[-1]
+    assert balance["friction_to_die"] == pytest.approx(balance["friction_to_workpiece"] * 0.4 / 0.6)
 
 
 @pytest.mark.parametrize("degree", [1, 2])
@@ -85,7 +86,7 @@ def test_frozen_protocol():
     second = field.change(u)
     assert first > 1e-2
     assert second == pytest.approx(first / 2, rel=1e-10)
-    assert field.solves == 2  # the freeze reused the change's solve; T moved, so change solved again
+    assert field.solves == 2  # the freeze reused the change's solve; T moved: change solved again
     hottest = mesh.comm.allreduce(field.T.x.array.max(), op=MPI.MAX)
     assert hottest == pytest.approx(350.0)  # half way from 300 to the fixed 400
     field.destroy()

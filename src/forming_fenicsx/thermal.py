@@ -30,7 +30,8 @@ Units: a consistent system (scene units L, T, S); heat is work, S L^3 (with mm, 
 Then rho c is in S/K (MPa/K = N/(mm^2 K): aluminium's 2800 kg/m^3 x 1064 J/(kg K) = 2.98 MPa/K),
 kappa in S L^2/(T K) (N/(s K), numerically W/(m K): 201 for aluminium), h in S L/(T K)
 (N/(mm s K) = 1000 W/(m^2 K)), the plastic power density sigma:rate in S/T (MPa/s = mW/mm^3) and
-the friction power in S L/T (N/(mm s)). Temperatures in kelvin when a law reads them (Zener-Hollomon).
+the friction power in S L/T (N/(mm s)). Temperatures in kelvin when a law reads them
+(Zener-Hollomon).
 
 One linear solve (MUMPS LU, option prefix ``thermal_``) per velocity (and frozen temperature, when
 the heat source depends on it); docs/thermal.md has the measured orders, overshoots and balances.
@@ -78,13 +79,13 @@ class HeatExchange:
     name: str
     tags: tuple[int, ...]
     h: float
-    temperature: object
+    temperature: float | ufl.core.expr.Expr
 
 
 @dataclass(frozen=True)
 class FrictionHeat:
-    """The friction power per unit area q_f(v, T) on the facets tagged ``tags`` (tau . Delta v of the
-    flow's friction law), ``workpiece_share`` of it into the workpiece (1/2 unless given; see
+    """The friction power per unit area q_f(v, T) on the facets tagged ``tags`` (tau . Delta v of
+    the flow's friction law), ``workpiece_share`` of it into the workpiece (1/2 unless given; see
     effusivity_share), the rest into the die."""
 
     power: FieldExpression
@@ -107,7 +108,8 @@ def inflow_rate(v, n):
 
 def supg_parameter(v, diffusivity: float, degree: int, mesh):
     """tau = [(2|v|/h)^2 + (12 diffusivity/h^2)^2]^(-1/2), h = |v| / (p |J^-1 v|) the cell length
-    along the streamline over the degree (sqrt|det J| / p where v = 0); 0 where both terms vanish."""
+    along the streamline over the degree (sqrt|det J| / p where v = 0); 0 where both terms
+    vanish."""
     speed = ufl.sqrt(ufl.dot(v, v))
     along = ufl.JacobianInverse(mesh) * v
     reference_speed = ufl.sqrt(ufl.dot(along, along))
@@ -118,14 +120,16 @@ def supg_parameter(v, diffusivity: float, degree: int, mesh):
 
 
 class TemperatureField:
-    """The steady temperature T (Lagrange of ``degree``) of a velocity field, and the frozen-coefficient
-    protocol (frozen.py) that couples it to the flow: ``freeze(u)`` solves the heat equation with u
-    (and the source at the current frozen T) and moves T ``relaxation`` of the way to it;
-    ``change(u)`` is ||T(u) - T|| / ||T|| in the weighted L2 norm (temperatures in kelvin, so that
-    the relative change means something).
+    """The steady temperature T (Lagrange of ``degree``) of a velocity field, and the
+    frozen-coefficient protocol (frozen.py) that couples it to the flow: ``freeze(u)`` solves the
+    heat equation with u (and the source at the current frozen T) and moves T ``relaxation`` of the
+    way to it; ``change(u)`` is ||T(u) - T|| / ||T|| in the weighted L2 norm (temperatures in
+    kelvin, so that the relative change means something).
 
     ``plastic_power(v, T)``: sigma:rate of the velocity v at the frozen temperature T (flow stress
-    times equivalent rate), UFL; beta of ``material`` times it is the heat source. ``inflow_temperature`` T_in: number or UFL.
+    times equivalent rate), UFL; beta of ``material`` times it is the heat source.
+    ``inflow_temperature`` T_in: a number or UFL; T starts at ``initial_temperature``, a number
+    (T_in unless given), which is also the reference of the advected heat (energy_balance).
     ``fixed``: facet tag -> temperature imposed strongly (none in a forming scene: every condition
     there is a flux; the 1-D verification fixes both ends).
     """
@@ -142,12 +146,14 @@ class TemperatureField:
                  options: dict | None = None):
         mesh = u.function_space.mesh
         self.mesh, self.material, self.coordinates = mesh, material, coordinates
-        self.exchanges, self.friction, self.inflow_temperature = exchanges, friction, inflow_temperature
+        self.exchanges, self.friction = exchanges, friction
+        self.inflow_temperature = inflow_temperature
         self.relaxation = relaxation
         self.space = function_space(mesh, "P", degree)
         start = inflow_temperature if initial_temperature is None else initial_temperature
         self.T = dolfinx.fem.Function(self.space, name="temperature")
-        self.T.x.array[:] = float(start)  # a number: the inflow's unless given
+        self.reference_temperature = float(start)  # a number: the inflow's unless given
+        self.T.x.array[:] = self.reference_temperature
         self._candidate = dolfinx.fem.Function(self.space)
         self.velocity = dolfinx.fem.Function(u.function_space)  # the velocity T belongs to
         self.solves = 0
@@ -162,7 +168,8 @@ class TemperatureField:
         # a Constant, so that kappa = 0 (pure advection) keeps the diffusion terms' shapes in UFL
         kappa = dolfinx.fem.Constant(mesh, PETSc.ScalarType(material.conductivity))
         self.inflow = inflow_rate(v, self.n)
-        self.plastic_power = plastic_power(v, self.T) if plastic_power is not None else ufl.as_ufl(0.0)
+        self.plastic_power = (plastic_power(v, self.T) if plastic_power is not None
+                              else ufl.as_ufl(0.0))
         self.source = material.heat_fraction * self.plastic_power
         tau = supg_parameter(v, kappa / rho_c, degree, mesh)
         streamline = tau * ufl.dot(v, ufl.grad(w))
@@ -170,7 +177,7 @@ class TemperatureField:
         residual = advection - coordinates.divergence(kappa * ufl.grad(T))
         a = ((advection * w + kappa * ufl.dot(ufl.grad(T), ufl.grad(w)) + residual * streamline)
              * self.dx + rho_c * self.inflow * T * w * self.ds)
-        zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))  # keeps L a form when all data are 0
+        zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))  # keeps L a form when data are 0
         L = ((self.source * (w + streamline) + zero * w) * self.dx
              + rho_c * self.inflow * inflow_temperature * w * self.ds)
         for exchange in exchanges:
@@ -182,8 +189,9 @@ class TemperatureField:
             for tag in friction.tags:
                 L += friction.workpiece_share * self.friction_power * w * self.ds(tag)
         fdim = mesh.topology.dim - 1
-        self.bcs = [dolfinx.fem.dirichletbc(PETSc.ScalarType(value), dolfinx.fem.locate_dofs_topological(
-            self.space, fdim, facet_tags.indices[facet_tags.values == tag]), self.space)
+        self.bcs = [dolfinx.fem.dirichletbc(
+            PETSc.ScalarType(value), dolfinx.fem.locate_dofs_topological(
+                self.space, fdim, facet_tags.indices[facet_tags.values == tag]), self.space)
             for tag, value in (fixed or {}).items()]
         self._a, self._L = dolfinx.fem.form(a), dolfinx.fem.form(L)
         self._norm = dolfinx.fem.form(self._candidate ** 2 * self.dx)
@@ -221,7 +229,8 @@ class TemperatureField:
         dolfinx.fem.petsc.set_bc(self._rhs, self.bcs)
         self._ksp.solve(self._rhs, petsc_vec(self._candidate))
         if self._ksp.getConvergedReason() < 0:
-            raise RuntimeError(f"the temperature solve failed: KSP reason {self._ksp.getConvergedReason()}")
+            raise RuntimeError("the temperature solve failed: KSP reason "
+                               f"{self._ksp.getConvergedReason()}")
         self._candidate.x.scatter_forward()
         self.solves += 1
         self._solved_for = (u.x.array.copy(), self.T.x.array.copy())
@@ -246,18 +255,24 @@ class TemperatureField:
     def energy_balance(self, process_power: float | None = None) -> dict[str, float]:
         """The heat balance of the frozen T and velocity (per unit width in plane strain, of the
         whole body when axisymmetric), every term a power:
-        advected = int rho c T u.n ds with T_in where the flow enters (heat carried out - in),
+        advected = int rho c (T - T_0) u.n ds with T_in for T where the flow enters (the heat
+        carried out - in; T_0 the initial temperature: equal for a divergence-free u, and the
+        discrete flow's volume change int div u then carries T - T_0, not the whole T),
         exchange_<name> = int h (T - T_a) ds (heat to a tool or the air), plastic_power =
-        int P dx, generated = beta times it, friction_to_workpiece = f int q_f ds; ``residual`` = (advected + exchanges
-        - generated - friction_to_workpiece) / (generated + friction_to_workpiece), zero for the
-        exact T of a divergence-free u (discretely, up to int rho c T div u and quadrature).
+        int P dx, generated = beta times it, friction_to_workpiece = f int q_f ds; ``residual`` =
+        (advected + exchanges - generated - friction_to_workpiece) / (generated +
+        friction_to_workpiece), zero for the
+        exact T of a divergence-free u (discretely, up to int rho c (T - T_0) div u and quadrature).
         With ``process_power`` (ram or drawing force times the process velocity) also the global
         balance: it must equal the heat leaving (advected + exchanges + friction_to_die) plus the
         work stored, (1 - beta) int P dx: ``global_residual`` is the difference over it."""
         T, v, rho_c = self.T, self.velocity, self.material.heat_capacity
         beta = self.material.heat_fraction
         plastic = self.integral(self.plastic_power, self.dx)
-        terms = {"advected": self.integral(rho_c * (ufl.dot(v, self.n) * T + self.inflow
+        # enthalpy from the initial (inflow) temperature: the volume a discrete flow gains or loses
+        # (int div u) then carries T - T_ref, not T
+        T_ref = self.reference_temperature
+        terms = {"advected": self.integral(rho_c * (ufl.dot(v, self.n) * (T - T_ref) + self.inflow
                                                       * (T - self.inflow_temperature)), self.ds),
                  "plastic_power": plastic, "generated": beta * plastic}
         for exchange in self.exchanges:
@@ -265,17 +280,19 @@ class TemperatureField:
                 exchange.h * (T - exchange.temperature), self.ds(tag)) for tag in exchange.tags)
         friction = 0.0
         if self.friction is not None:
-            friction = sum(self.integral(self.friction_power, self.ds(tag)) for tag in self.friction.tags)
+            friction = sum(self.integral(self.friction_power, self.ds(tag))
+                           for tag in self.friction.tags)
         share = self.friction.workpiece_share if self.friction is not None else 0.0
-        terms["friction_to_workpiece"], terms["friction_to_die"] = share * friction, (1 - share) * friction
+        terms["friction_to_workpiece"] = share * friction
+        terms["friction_to_die"] = (1 - share) * friction
         leaving = terms["advected"] + sum(terms[f"exchange_{e.name}"] for e in self.exchanges)
         put_in = terms["generated"] + terms["friction_to_workpiece"]
         terms["residual"] = (leaving - put_in) / put_in if put_in != 0 else float("nan")
         if process_power is not None:
             stored = (1 - beta) * plastic
             terms["process_power"], terms["stored"] = process_power, stored
-            terms["global_residual"] = (process_power - leaving - terms["friction_to_die"] - stored) \
-                / process_power
+            heat_out = leaving + terms["friction_to_die"] + stored
+            terms["global_residual"] = (process_power - heat_out) / process_power
         return terms
 
     def destroy(self) -> None:

@@ -27,15 +27,16 @@ LEFT, RIGHT, BOTTOM, TOP = 1, 2, 3, 4
 
 def rectangle(cells: tuple[int, int], size: tuple[float, float], degree: int,
               comm: MPI.Comm = MPI.COMM_WORLD):
-    """[0, size_x] x [0, size_y] in quadrilaterals with its sides tagged LEFT, RIGHT, BOTTOM, TOP, and
-    the vector Lagrange space of ``degree`` for a prescribed velocity."""
-    mesh = dolfinx.mesh.create_rectangle(comm, [np.zeros(2), np.array(size, dtype=float)], list(cells),
-                                         dolfinx.mesh.CellType.quadrilateral)
+    """[0, size_x] x [0, size_y] in quadrilaterals with its sides tagged LEFT, RIGHT, BOTTOM, TOP,
+    and the vector Lagrange space of ``degree`` for a prescribed velocity."""
+    mesh = dolfinx.mesh.create_rectangle(comm, [np.zeros(2), np.array(size, dtype=float)],
+                                         list(cells), dolfinx.mesh.CellType.quadrilateral)
     sides = ((LEFT, lambda x: np.isclose(x[0], 0.0)), (RIGHT, lambda x: np.isclose(x[0], size[0])),
              (BOTTOM, lambda x: np.isclose(x[1], 0.0)), (TOP, lambda x: np.isclose(x[1], size[1])))
     facets = [dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for _, where in sides]
     indices = np.concatenate(facets)
-    values = np.concatenate([np.full(len(f), tag, dtype=np.int32) for (tag, _), f in zip(sides, facets)])
+    values = np.concatenate([np.full(len(f), tag, dtype=np.int32)
+                             for (tag, _), f in zip(sides, facets)])
     order = np.argsort(indices)  # meshtags wants sorted facets; each facet lies on one side
     tags = dolfinx.mesh.meshtags(mesh, 1, indices[order].astype(np.int32), values[order])
     return mesh, tags, function_space(mesh, "P", degree, (2,))
@@ -54,7 +55,8 @@ def sample(function: dolfinx.fem.Function, points: np.ndarray) -> tuple[np.ndarr
     return function.eval(points[found], cells[found]).ravel(), found
 
 
-def layer(peclet: float, cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, float]:
+def layer(peclet: float, cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD
+          ) -> dict[str, float]:
     """u T' = k T'' on (0, 1) with u = 1, k = 1/Pe, T(0) = 0 and T(1) = 1 fixed, on ``cells`` square
     cells in a row (the cell Peclet number u h/(2k) = Pe/(2 cells)). Sampled at 20 points per cell
     along the strip's middle line: overshoot max T - 1, undershoot -min T, and the largest error
@@ -63,8 +65,8 @@ def layer(peclet: float, cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORL
     mesh, tags, V = rectangle((cells, 1), (1.0, 1.0 / cells), 1, comm)
     u = dolfinx.fem.Function(V)
     u.x.array[0::2] = 1.0
-    field = TemperatureField(u, CoordinateSystem(mesh), tags, ThermalMaterial(1.0, 1.0 / peclet), 0.0,
-                             degree, fixed={LEFT: 0.0, RIGHT: 1.0})
+    field = TemperatureField(u, CoordinateSystem(mesh), tags, ThermalMaterial(1.0, 1.0 / peclet),
+                             0.0, degree, fixed={LEFT: 0.0, RIGHT: 1.0})
     x = np.linspace(0.0, 1.0, 20 * cells + 1)
     points = np.column_stack([x, np.full_like(x, 0.5 / cells), np.zeros_like(x)])
     values, found = sample(field.solve(u), points)
@@ -75,17 +77,19 @@ def layer(peclet: float, cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORL
         return comm.allreduce(float(array.max(initial=-np.inf)), op=MPI.MAX)
     return {"overshoot": largest(values - 1.0), "undershoot": largest(-values),
             "error_outside_layer": largest(error[x[found] < 1 - 1.0 / cells - 1e-12]),
-            "error_first_half": largest(error[x[found] <= 0.5]), "cell_peclet": peclet / (2 * cells)}
+            "error_first_half": largest(error[x[found] <= 0.5]),
+            "cell_peclet": peclet / (2 * cells)}
 
 
 
-# -- manufactured solutions -------------------------------------------------------------------------
+# -- manufactured solutions ---------------------------------------------------------------------
 # On the unit square, x the flow (axis) direction, y the half-thickness (radius): the flow
 # u = (1 + a sin(pi x), -y a pi cos(pi x) / m) (m = 2 axisymmetric, 1 plane), divergence-free in its
 # symmetry, entering at x = 0, leaving at x = 1, along the symmetry line y = 0, and entering through
 # y = 1 at less than 30 degrees (a tool face, not an inflow); T has dT/dn = 0 on x = 0 (Danckwerts's
-# inflow condition holds with T_in = T), x = 1 (the insulated exit) and y = 0 (the symmetry line); the
-# top is a tool face with heat exchange and friction heat whose ambient temperature makes T exact.
+# inflow condition holds with T_in = T), x = 1 (the insulated exit) and y = 0 (the symmetry line);
+# the top is a tool face with heat exchange and friction heat whose ambient temperature makes T
+# exact there: kappa dT/dy = -h (T - T_a) + f q_f.
 MANUFACTURED = {"amplitude": 0.15, "heat_capacity": 1.0, "conductivity": 0.02, "h": 2.0,
                 "heat_fraction": 0.9, "share": 0.6}
 
@@ -128,10 +132,11 @@ def manufactured(symmetry: str, degree: int, cells: int, comm: MPI.Comm = MPI.CO
     rho_c, kappa, h = (MANUFACTURED[k] for k in ("heat_capacity", "conductivity", "h"))
     beta, share = MANUFACTURED["heat_fraction"], MANUFACTURED["share"]
     source = rho_c * ufl.dot(exact_u, ufl.grad(T)) - coordinates.divergence(kappa * ufl.grad(T))
-    ambient = T + (kappa * T.dx(1) - share * friction_power(exact_u)) / h  # kappa T_y = -h (T - T_a) + f q_f
+    ambient = T + (kappa * T.dx(1) - share * friction_power(exact_u)) / h
     field = solved(TemperatureField(
         u, coordinates, tags, ThermalMaterial(rho_c, kappa, beta), T, degree,
-        plastic_power=lambda v, T: source / beta, exchanges=(HeatExchange("tool", (TOP,), h, ambient),),
+        plastic_power=lambda v, T: source / beta,
+        exchanges=(HeatExchange("tool", (TOP,), h, ambient),),
         friction=FrictionHeat(friction_power, (TOP,), share), initial_temperature=1.0,
         quadrature_degree=2 * degree + 4), u)
     error = field.T - T
@@ -149,7 +154,7 @@ def orders(errors: list[float]) -> np.ndarray:
     return np.log2(errors[:-1] / errors[1:])
 
 
-# -- the adiabatic limit ----------------------------------------------------------------------------
+# -- the adiabatic limit ------------------------------------------------------------------------
 ADIABATIC = {"n": 0.2, "heat_capacity": 2.5, "heat_fraction": 0.9, "inflow_temperature": 700.0}
 
 
@@ -157,8 +162,8 @@ def adiabatic(symmetry: str, degree: int, cells: int, softening: float | None = 
               comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, float]:
     """The exact radial flow through the smooth cone (axisymmetric) or wedge (plane strain) of
     verification.RADIAL, interpolated in Q_degree on the isoparametric sector mesh, with the Norton
-    law sigma = K rate^n (plastic power P = K rate^(n+1)), kappa = 0 and no tool contact: along every
-    streamline rho c dT/dt = beta P, so T rises by beta W/(rho c) with W = int sigma d(eps) =
+    law sigma = K rate^n (plastic power P = K rate^(n+1)), kappa = 0 and no tool contact: along
+    every streamline rho c dT/dt = beta P, so T rises by beta W/(rho c) with W = int sigma d(eps) =
     sigma_rr(rho1) - sigma_rr(rho0), the same on every streamline. With ``softening`` theta the
     flow stress falls as exp(-(T - T_in)/theta), a temperature-dependent source coupled by freezing
     (relaxation 1/2) until the change is below 1e-10: exp(dT/theta) - 1 = beta W/(rho c theta).
@@ -179,8 +184,9 @@ def adiabatic(symmetry: str, degree: int, cells: int, softening: float | None = 
     def plastic_power(v, T):
         power = RADIAL["K"] * coordinates.equivalent_strain_rate(v) ** (n + 1)
         return power if softening is None else power * ufl.exp(-(T - T_in) / softening)
-    field = TemperatureField(u, coordinates, forming_mesh.facet_tags, ThermalMaterial(rho_c, 0.0, beta),
-                             T_in, degree, plastic_power=plastic_power)
+    field = TemperatureField(u, coordinates, forming_mesh.facet_tags,
+                             ThermalMaterial(rho_c, 0.0, beta), T_in, degree,
+                             plastic_power=plastic_power)
     freezes, heating = 0, beta * radial_stress_rise(symmetry, n) / rho_c
     if softening is None:
         solved(field, u)
