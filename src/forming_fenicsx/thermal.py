@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import dolfinx.mesh
 import numpy as np
 import ufl
 from mpi4py import MPI
@@ -52,8 +53,10 @@ from petsc4py import PETSc
 from .compat import function_space, petsc_vec
 from .coordinates import CoordinateSystem
 from .petsc_options import PrefixedOptions
+from .roles import ROLES
 
 PREFIX = "thermal"
+CONTAINER = max(ROLES.values()) + 1  # the facet tag of the container wall, split from gamma3
 INFLOW_COSINE = 0.5  # the flow enters at more than 30 degrees to the boundary (sin 30 = 0.5)
 
 # A field of the velocity v and the frozen temperature T (the Functions the temperature's forms
@@ -241,6 +244,12 @@ class TemperatureField:
         self.T.x.array[:] += self.relaxation * (candidate.x.array - self.T.x.array)
         self.T.x.scatter_forward()
 
+    def settle(self, u: dolfinx.fem.Function) -> None:
+        """T <- T(u), the solution at u itself: a one-way computation (freeze moves T
+        ``relaxation`` of the way)."""
+        self.T.x.array[:] = self.solve(u).x.array
+        self.T.x.scatter_forward()
+
     def change(self, u: dolfinx.fem.Function) -> float:
         self.solve(u)
         norm = self.mesh.comm.allreduce(dolfinx.fem.assemble_scalar(self._norm))
@@ -298,3 +307,60 @@ class TemperatureField:
     def destroy(self) -> None:
         for item in (self._ksp, self._matrix, self._rhs):
             item.destroy()
+
+
+def container_tags(problem):
+    """The problem's facet tags with the contact facets ahead of the die (the container wall of a
+    built-in extrusion geometry: x < die_entry or die_position) tagged CONTAINER; unchanged for
+    drawing and a mesh file (one Gamma3)."""
+    geometry, tags = problem.scene.geometry, problem.facet_tags
+    start = getattr(geometry, "die_entry", None) or getattr(geometry, "die_position", None)
+    if problem.scene.process.kind != "extrusion" or geometry.mesh_file is not None or start is None:
+        return tags
+    midpoints = dolfinx.mesh.compute_midpoints(problem.mesh, problem.mesh.topology.dim - 1,
+                                               tags.indices)
+    values = tags.values.copy()
+    ahead = midpoints[:, 0] < start * (1 - 1e-9)
+    values[(values == ROLES["gamma3_contact"]) & ahead] = CONTAINER
+    return dolfinx.mesh.meshtags(problem.mesh, problem.mesh.topology.dim - 1, tags.indices, values)
+
+
+def scene_temperature_field(problem, plastic_power: FieldExpression | None = None,
+                            friction_power: FieldExpression | None = None,
+                            options: dict | None = None) -> TemperatureField:
+    """The TemperatureField of a flow problem whose scene has [thermal] (scene.Thermal): the die
+    (Gamma3) and container exchanges, the air on the free surfaces (Gamma2, Gamma4) when air_h > 0,
+    friction heat on the contact when the flow has friction, Q_k of the flow's degree.
+    ``plastic_power`` defaults to the flow law's sigma(rate(v)) rate(v) (the isothermal law: a
+    temperature-dependent law passes its own), ``friction_power`` to c_T |v_T|^2 with the flow's
+    slip coefficient (friction.py)."""
+    from .friction import tangential
+
+    thermal, problem_roles = problem.scene.thermal, problem.roles
+    tags = container_tags(problem)
+    contact = [ROLES["gamma3_contact"]] if "gamma3_contact" in problem_roles else []
+    has_container = problem.comm.allreduce(int(np.any(tags.values == CONTAINER)), op=MPI.MAX)
+    container = [CONTAINER] if has_container else []
+    free = tuple(ROLES[role] for role in ("gamma2_free", "gamma4_free") if role in problem_roles)
+    exchanges = [HeatExchange("die", tuple(contact), thermal.die_h, thermal.die_temperature),
+                 HeatExchange("container", tuple(container), thermal.container_h,
+                              thermal.container_temperature)]
+    if thermal.air_h > 0:
+        exchanges.append(HeatExchange("air", free, thermal.air_h, thermal.air_temperature))
+
+    def flow_power(v, T):
+        return problem.flow_stress(v) * problem.equivalent_strain_rate(v)
+
+    def slip_power(v, T):
+        slip = tangential(v, problem.n)
+        return problem.friction_coefficient() * ufl.dot(slip, slip)
+    friction = None
+    if problem.has_friction:
+        friction = FrictionHeat(friction_power or slip_power, tuple(contact + container),
+                                thermal.friction_share)
+    material = ThermalMaterial(thermal.heat_capacity, thermal.conductivity, thermal.heat_fraction)
+    return TemperatureField(problem.u, problem.coordinates, tags, material,
+                            thermal.inflow_temperature, problem.scene.discretisation.degree,
+                            plastic_power=plastic_power or flow_power,
+                            exchanges=tuple(e for e in exchanges if e.tags), friction=friction,
+                            options=options)
