@@ -6,7 +6,7 @@ div and grad those of the coordinate system (the axisymmetric div carries the 1/
 coordinates.py). Boundary conditions, n the outward normal, (u.n)^- = max(-u.n, 0):
 - inflow, where the velocity enters at more than 30 degrees to the boundary (as the strain's
   transport; a die wall or free surface that the flow follows is not an inflow): Danckwerts'
-  condition kappa dT/dn = rho c (u.n)^- (T - T_in), the heat that arrives is the heat carried in at
+  condition kappa dT/dn = rho c (u.n)^- (T_in - T), the heat that arrives is the heat carried in at
   T_in (T = T_in as kappa -> 0), imposed weakly;
 - heat exchange with a tool (die, container) or the air: -kappa dT/dn = h (T - T_a);
 - friction heat on the die interface, the power q_f = tau . Delta v per unit area, a share f of it
@@ -57,7 +57,7 @@ from .roles import ROLES
 
 PREFIX = "thermal"
 CONTAINER = max(ROLES.values()) + 1  # the facet tag of the container wall, split from gamma3
-INFLOW_COSINE = 0.5  # the flow enters at more than 30 degrees to the boundary (sin 30 = 0.5)
+INFLOW_SINE = 0.5  # the flow enters at more than 30 degrees to the boundary (sin 30 = 0.5)
 
 # A field of the velocity v and the frozen temperature T (the Functions the temperature's forms
 # read): a UFL expression, e.g. the flow stress sigma(rate(v), T) times rate(v)
@@ -106,7 +106,7 @@ def effusivity_share(workpiece: ThermalMaterial, die: ThermalMaterial) -> float:
 def inflow_rate(v, n):
     """(u.n)^- where the velocity enters at more than 30 degrees to the boundary, else 0."""
     entering = -ufl.dot(v, n)
-    return ufl.conditional(ufl.gt(entering, INFLOW_COSINE * ufl.sqrt(ufl.dot(v, v))), entering, 0.0)
+    return ufl.conditional(ufl.gt(entering, INFLOW_SINE * ufl.sqrt(ufl.dot(v, v))), entering, 0.0)
 
 
 def supg_parameter(v, diffusivity: float, degree: int, mesh):
