@@ -101,11 +101,12 @@ def manufactured_velocity(symmetry: str, x, cos=np.cos, sin=np.sin):
 
 
 def manufactured_temperature(x):
+    """T of the manufactured problem (UFL): dT/dn = 0 on x = 0, x = 1 and y = 0."""
     return (1 + 0.5 * ufl.cos(math.pi * x[0]) * ufl.cos(math.pi * x[1] / 2)
             + 0.25 * ufl.cos(2 * math.pi * x[0]) * x[1] ** 2)
 
 
-def friction_power(v, T=None):
+def friction_power(v, T):
     """A friction power that depends on the velocity, for the manufactured tool face."""
     return 1 + ufl.dot(v, v)
 
@@ -125,7 +126,7 @@ def manufactured(symmetry: str, degree: int, cells: int, comm: MPI.Comm = MPI.CO
     rho_c, kappa, h = (MANUFACTURED[k] for k in ("heat_capacity", "conductivity", "h"))
     beta, share = MANUFACTURED["heat_fraction"], MANUFACTURED["share"]
     source = rho_c * ufl.dot(exact_u, ufl.grad(T)) - coordinates.divergence(kappa * ufl.grad(T))
-    ambient = T + (kappa * T.dx(1) - share * friction_power(exact_u)) / h
+    ambient = T + (kappa * T.dx(1) - share * friction_power(exact_u, T)) / h
     field = TemperatureField(
         u, coordinates, tags, ThermalMaterial(rho_c, kappa, beta), T, degree,
         plastic_power=lambda v, T: source / beta,
