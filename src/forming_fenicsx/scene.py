@@ -1,7 +1,8 @@
 """Scenes: the TOML input that says everything about one run, validated before any meshing.
 
 A scene has the sections ``process``, ``geometry``, ``material``, ``friction``, ``penalty``,
-``discretisation``, ``solver``, ``output`` and ``units``. Every value has a default; :func:`load_scene`
+``discretisation``, ``solver``, ``output`` and ``units``, and ``thermal`` when it computes the
+temperature. Every value has a default; :func:`load_scene`
 rejects unknown keys, mistyped, non-finite or non-physical values with a :class:`SceneError` that names
 the key and what is allowed.
 
@@ -556,6 +557,63 @@ class Output:
             raise SceneError("output.die_entry_trim", f"must be a finite number >= 0; got {self.die_entry_trim}")
 
 
+@dataclass
+class Thermal:
+    """Steady heat transfer in the workpiece (thermal.py, docs/thermal.md), built only when the
+    scene has a [thermal] section. Values in the scene's units (heat is stress x volume: with mm,
+    s, MPa the heat is in mJ = N mm): ``heat_capacity`` rho c in stress/K (MPa/K; aluminium 2.98),
+    ``conductivity`` kappa in force/(time K) (N/(s K), the number of W/(m K); aluminium 201),
+    ``heat_fraction`` beta (the plastic work turned into heat), heat transfer coefficients ``*_h``
+    in force/(length time K) (N/(mm s K) = 1000 W/(m^2 K)), temperatures in kelvin (a
+    Zener-Hollomon law reads them). ``inflow_temperature``: the billet or wire entering;
+    ``die_*``: the die contact (Gamma3), ``container_*`` (extrusion): the container wall, the die's
+    values unless given; ``air_*``: the free surfaces (``air_h`` 0: insulated); ``friction_share``:
+    the share of the friction heat into the workpiece (the rest into the die)."""
+
+    heat_capacity: float | None = None
+    conductivity: float | None = None
+    inflow_temperature: float | None = None
+    heat_fraction: float = 0.9
+    die_h: float = 0.0
+    die_temperature: float | None = None
+    container_h: float | None = None
+    container_temperature: float | None = None
+    air_h: float = 0.0
+    air_temperature: float = 293.15
+    friction_share: float = 0.5
+
+    REQUIRED: ClassVar[tuple[str, ...]] = ("heat_capacity", "conductivity", "inflow_temperature")
+
+    def resolve(self) -> None:
+        """The tool temperatures left out: the die at the inflow temperature, the container as the
+        die."""
+        for key in self.REQUIRED:
+            if getattr(self, key) is None:
+                raise SceneError(f"thermal.{key}", "missing; [thermal] needs heat_capacity, "
+                                 "conductivity and inflow_temperature")
+        if self.die_temperature is None:
+            self.die_temperature = self.inflow_temperature
+        if self.container_h is None:
+            self.container_h = self.die_h
+        if self.container_temperature is None:
+            self.container_temperature = self.die_temperature
+
+    def check(self) -> None:
+        check_positive("thermal.heat_capacity", self.heat_capacity)
+        for key in ("conductivity", "die_h", "container_h", "air_h"):
+            value = getattr(self, key)
+            if value is not None and not value >= 0:
+                raise SceneError(f"thermal.{key}", f"must be a finite number >= 0; got {value}")
+        for key in ("inflow_temperature", "die_temperature", "container_temperature",
+                    "air_temperature"):
+            if getattr(self, key) is not None and not getattr(self, key) > 0:
+                raise SceneError(f"thermal.{key}",
+                                 f"must be > 0 (kelvin); got {getattr(self, key)}")
+        for key in ("heat_fraction", "friction_share"):
+            if not 0 <= getattr(self, key) <= 1:
+                raise SceneError(f"thermal.{key}", f"must lie in [0, 1]; got {getattr(self, key)}")
+
+
 # The geometry of each process and geometry.die (the first is the default)
 GEOMETRIES = {"extrusion": {"square": ExtrusionGeometry, "conical": ConicalExtrusionGeometry},
               "drawing": {"conical": DrawingGeometry}}
@@ -598,6 +656,7 @@ class Scene:
     solver: Solver
     output: Output
     units: Units = field(default_factory=Units)
+    thermal: Thermal | None = None  # only when the scene has [thermal]
 
     def resolve(self) -> None:
         """Turn the values left out or given relative into absolute ones, in the order they depend on each
@@ -616,11 +675,14 @@ class Scene:
         self.discretisation.resolve(self.geometry.thinnest, MESH_SIZE_RELATIVE[self.process.kind])
         if self.friction.mollification_length is None:  # about one element, recorded as used
             self.friction.mollification_length = self.discretisation.mesh_size
+        if self.thermal is not None:
+            self.thermal.resolve()
 
     def check(self) -> None:
         """Checks of each section, then of values that are valid alone but not together."""
         for section in dataclasses.fields(self):
-            getattr(self, section.name).check()
+            if getattr(self, section.name) is not None:
+                getattr(self, section.name).check()
         if self.solver.method == "newton" and self.discretisation.averaging != "quadrature":
             raise SceneError("solver.method", 'newton differentiates G at the integration points: it needs '
                              f'discretisation.averaging = "quadrature"; got {self.discretisation.averaging!r}')
@@ -634,6 +696,12 @@ class Scene:
         if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
             raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with discontinuous P1 "
                              f'pressure: it needs discretisation.element = "Q2"; got {self.discretisation.element!r}')
+        thermal = self.thermal
+        if thermal is not None and self.geometry.mesh_file is not None and (
+                thermal.container_h, thermal.container_temperature) != (thermal.die_h,
+                                                                         thermal.die_temperature):
+            raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
+                             "container takes the die's values (leave container_* out)")
         if self.discretisation.mesh_size > self.geometry.thinnest:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
@@ -657,7 +725,8 @@ class Scene:
 
     def to_dict(self) -> dict[str, Any]:
         """Every resolved value, section by section."""
-        return {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self)}
+        return {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self)
+                if getattr(self, f.name) is not None}
 
 
 def _typename(tp: Any) -> str:
@@ -742,7 +811,7 @@ def _material(table: dict[str, Any], defaults: dict[str, Any], units: dict[str, 
 
 
 SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output",
-            "units")
+            "units", "thermal")
 
 
 def scene_from_dict(data: dict[str, Any]) -> Scene:
@@ -765,6 +834,12 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     classes = {"geometry": geometry_class(kind, tables["geometry"]), "friction": Friction, "penalty": Penalty,
                "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units}
     built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
+    if "thermal" in data:  # heat transfer only when the scene asks for it
+        if kind == "drawing":
+            for key in ("container_h", "container_temperature"):
+                if key in tables["thermal"]:
+                    raise SceneError(f"thermal.{key}", "drawing has no container; leave it out")
+        built["thermal"] = _build(Thermal, tables["thermal"], "thermal")
     scene = Scene(process=process, material=_material(tables["material"], defaults.get("material", {}),
                                                       tables["units"]), **built)
     scene.resolve()
