@@ -14,7 +14,7 @@ import dolfinx.fem.petsc
 import ufl
 from petsc4py import PETSc
 
-from . import contact, friction, strain_profile
+from . import contact, friction, strain_profile, thermal
 from .boundary_filter import BoundaryFilter
 from .coordinates import CoordinateSystem
 from .fields import FlowFields
@@ -161,6 +161,11 @@ class FlowProblem:
         if load is not None:
             residual -= load
         self.residual = split_form(residual, self._apart_degree)
+        # the temperature of a scene with [thermal] (thermal.py): taken from the converged flow
+        # (one way: no flow law reads it yet)
+        self.temperature_field = None
+        if scene.thermal is not None:
+            self.temperature_field = thermal.scene_temperature_field(self)
 
     # -- kinematics of the scene's coordinate system --------------------------------------------
     def strain_rate(self, u):

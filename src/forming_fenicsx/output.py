@@ -61,6 +61,17 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
             writer.writerow([f"{value:.8g}" for value in row])
 
 
+def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
+    """exit_<quantity>.csv: y across the product and the quantity ``name`` (exit_profile of
+    postprocess.py), the headers with their units (the strain profile is the next pass's
+    material.initial_strain_file: strain_profile.py reads it)."""
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow([units.column("y"), units.column(name)])
+        for row in zip(profile["y"], profile["values"], strict=True):
+            writer.writerow([f"{value:.8g}" for value in row])
+
+
 def save_velocity(path: Path, u) -> None:
     """velocity.npz: node coordinates and velocity of every node, gathered on rank 0 (collective).
 

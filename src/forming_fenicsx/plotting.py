@@ -115,23 +115,25 @@ def write_die_plot(profile: dict, path: Path, title: str, units: Units) -> Path:
     return path
 
 
-def write_strain_profile_plot(profile: dict, path: Path, title: str, units: Units,
-                              ideal: float | None = None) -> Path:
-    """exit_strain.png: the equivalent strain across the product against y (the hardness profile),
-    with the ideal strain ln(A0/A1) gained for comparison."""
+def write_exit_profile_plot(profile: dict, path: Path, title: str, label: str, dimension: str,
+                           units: Units, reference: tuple[str, float] | None = None) -> Path:
+    """exit_<quantity>.png: a quantity across the product against y (the hardness or temperature
+    profile), with a reference level (``(label, value)``: the ideal strain, the inflow
+    temperature)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(profile["y"], profile["equivalent_strain"], "b.-", label="FE equivalent strain")
-    if ideal is not None:
-        ax.axhline(ideal, color="k", linestyle="--", label=f"entry strain + ideal ln(A0/A1) = {ideal:.4g}")
+    ax.plot(profile["y"], profile["values"], "b.-", label=f"FE {label}")
+    if reference is not None:
+        ax.axhline(reference[1], color="k", linestyle="--", label=f"{reference[0]} = {reference[1]:.4g}")
     ax.set_xlabel(units.labelled("y, from the axis to the surface of the product", "length"))
-    ax.set_ylabel("equivalent strain")
-    ax.set_title(f"{title}: strain across the product")
-    ax.set_ylim(bottom=0.0)
+    ax.set_ylabel(units.labelled(label, dimension))
+    ax.set_title(f"{title}: {label} across the product")
+    if dimension != "temperature":
+        ax.set_ylim(bottom=0.0)
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()

@@ -7,6 +7,7 @@ penalty pressure sigma_H = div(u)/d of (3.4).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -182,13 +183,16 @@ def _flux_weight(problem: FlowProblem, leaving: bool):
     return ufl.conditional(ufl.gt(flux, 0.5 * ufl.sqrt(ufl.dot(problem.u, problem.u))), flux, 0.0)
 
 
-def mean_strain_through(problem: FlowProblem, leaving: bool = True) -> float:
-    """The flux-weighted mean equivalent strain leaving (or entering) the workpiece,
-    int eps |u.n| / int |u.n| over the outflow (inflow): the mean strain of the product (of the
-    stock)."""
+def mean_through(problem: FlowProblem, field, leaving: bool = True) -> float:
+    """The flux-weighted mean of a field leaving (or entering) the workpiece,
+    int f |u.n| / int |u.n| over the outflow (inflow): the mean of the product (of the stock)."""
     weight = _flux_weight(problem, leaving)
-    return _integrate(problem, problem.strain * weight * problem.ds) / _integrate(
-        problem, weight * problem.ds)
+    return _integrate(problem, field * weight * problem.ds) / _integrate(problem, weight * problem.ds)
+
+
+def mean_strain_through(problem: FlowProblem, leaving: bool = True) -> float:
+    """The mean equivalent strain of the product (or of the stock, ``leaving`` False)."""
+    return mean_through(problem, problem.strain, leaving)
 
 
 def product_flow_stress(problem: FlowProblem) -> float:
@@ -221,20 +225,40 @@ def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
             "product_flow_stress": product_flow_stress(problem)}
 
 
-def exit_strain_profile(problem: FlowProblem, points: int = 41) -> dict[str, np.ndarray] | None:
-    """The equivalent strain across the product (the hardness profile): y from the axis to the
-    surface on the section half an exit thickness before the workpiece's end (rank 0; None
-    elsewhere and without a hardening law)."""
-    if problem.strain is None:
-        return None
+def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, np.ndarray] | None:
+    """A field across the product: y from the axis to the surface on the section half an exit
+    thickness before the workpiece's end (rank 0; None elsewhere)."""
     from .sections import values_at
 
     g = problem.scene.geometry
     x = g.length - 0.5 * g.thinnest
     y = np.linspace(0.0, g.thinnest * (1 - 1e-9), points)
-    eps = values_at(problem, problem.strain, np.column_stack([np.full(points, x), y]),
-                    problem.scene.discretisation.degree)
-    return {"y": y, "equivalent_strain": eps} if problem.comm.rank == 0 else None
+    values = values_at(problem, field, np.column_stack([np.full(points, x), y]),
+                       problem.scene.discretisation.degree)
+    return {"y": y, "values": values} if problem.comm.rank == 0 else None
+
+
+def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str, Any]:
+    """With [thermal]: the temperature taken from the converged flow (one way), the product's mean
+    (flux-weighted), lowest and highest exit temperature (across the exit section), and the energy
+    balance (TemperatureField.energy_balance) against the work of the driving force, the ram or
+    drawing force (``numbers``) times the process velocity (plus the applied force's on Gamma5)."""
+    field = problem.temperature_field
+    if field is None:
+        return {}
+    field.settle(problem.u)
+    force = numbers["ram_force"] if "ram_force" in numbers else numbers["drawing_force"]
+    power = force * problem.scene.process.velocity
+    if problem.has_force:
+        power += _integrate(problem, problem.scene.process.applied_force
+                            * ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma5_force"]))
+    balance = field.energy_balance(power)
+    profile = exit_profile(problem, field.T)
+    extremes = problem.comm.bcast(
+        (float(profile["values"].min()), float(profile["values"].max())) if profile else None)
+    return {"mean_exit_temperature": mean_through(problem, field.T), "min_exit_temperature": extremes[0],
+            "max_exit_temperature": extremes[1], "energy_balance": balance,
+            "energy_balance_residual": balance["global_residual"]}
 
 
 def free_surface_crossing(problem: FlowProblem) -> float:
@@ -354,6 +378,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     return {
         **process,
         **hardening_scalars(problem),
+        **thermal_scalars(problem, process),
         "die_force_x": die_normal + die_friction,
         "die_separation_force": die_separation_force(problem),
         "die_normal_force_x": die_normal,
@@ -393,6 +418,8 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
         sources["equivalent_strain"] = (problem.strain, problem.full_degree)
         sources["flow_stress"] = (problem.flow_stress(problem.u), problem.full_degree)
     fields = [velocity]
+    if problem.temperature_field is not None:  # [thermal]: the temperature, as solved
+        fields.append(problem.temperature_field.T)
     for name, (expr, quadrature) in sources.items():
         target = dolfinx.fem.Function(space, name=name)
         fields.append(LumpedProjector(expr, target, quadrature).project())

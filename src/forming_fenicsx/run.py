@@ -16,11 +16,12 @@ from mpi4py import MPI
 from .forms import FlowProblem
 from .geometry import build_mesh
 from .newton import NewtonSolver
-from .output import load_velocity, save_velocity, write_die_profile, write_fields, write_history, write_summary
-from .plotting import write_die_plot, write_figures, write_strain_profile_plot
-from .postprocess import die_profile, exit_strain_profile, force_balance, output_fields, scalars
+from .output import (load_velocity, save_velocity, write_die_profile, write_exit_profile, write_fields,
+                     write_history, write_summary)
+from .plotting import write_die_plot, write_exit_profile_plot, write_figures
+from .postprocess import die_profile, exit_profile, force_balance, output_fields, scalars
 from .sanity import check_run
-from .strain_profile import write_strain_profile
+from .units import DIMENSIONS
 from .scene import Scene
 from .solvers import SecantSolver, SolveResult
 
@@ -142,13 +143,21 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     if scene.output.figures:
         write_figures(problem, out, title or scene.process.kind)
     profile = die_profile(problem)
-    strain = exit_strain_profile(problem)
-    if comm.rank == 0 and strain is not None:  # a hardening law: the product's strain profile
-        write_strain_profile(out / "exit_strain.csv", strain["y"], strain["equivalent_strain"],
-                             scene.units.label("length"))
-        if scene.output.figures:
-            write_strain_profile_plot(strain, out / "exit_strain.png", title or scene.process.kind,
-                                      scene.units, summary["mean_entry_strain"] + summary["ideal_strain"])
+    profiles = []  # (file stem, summary/units key, profile, label, reference level)
+    if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
+        profiles.append(("exit_strain", "equivalent_strain", exit_profile(problem, problem.strain),
+                         "equivalent strain", ("entry strain + ideal ln(A0/A1)",
+                                               summary["mean_entry_strain"] + summary["ideal_strain"])))
+    if problem.temperature_field is not None:  # [thermal]: the product's temperature profile
+        profiles.append(("exit_temperature", "temperature",
+                         exit_profile(problem, problem.temperature_field.T), "temperature",
+                         ("inflow temperature", scene.thermal.inflow_temperature)))
+    for stem, key, across, label, reference in profiles:
+        if comm.rank == 0:
+            write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
+            if scene.output.figures:
+                write_exit_profile_plot(across, out / f"{stem}.png", title or scene.process.kind, label,
+                                        DIMENSIONS.get(key, ""), scene.units, reference)
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:

@@ -71,15 +71,6 @@ def profile_values(profile: np.ndarray, y: np.ndarray, half_size: float) -> np.n
     return np.interp(y * profile[-1, 0] / half_size, profile[:, 0], profile[:, 1])
 
 
-def write_strain_profile(path: Path, y: np.ndarray, strain: np.ndarray, length_label: str) -> None:
-    """exit_strain.csv: y and the strain, the y header with the length unit when the scene has one."""
-    with path.open("w", newline="") as stream:
-        writer = csv.writer(stream)
-        writer.writerow([f"y [{length_label}]" if length_label else "y", "equivalent_strain"])
-        for row in zip(y, strain, strict=True):
-            writer.writerow([f"{value:.8g}" for value in row])
-
-
 def inflow_strain(mesh, degree: int, profile: np.ndarray, half_size: float):
     """The profile as a Lagrange Function of ``degree`` on the mesh, a function of y alone (the
     inflow strain of strain_transport.py, and its first guess everywhere)."""

@@ -31,6 +31,9 @@ DIMENSIONS = {
     "s": "length", "x": "length", "y": "length", "contact_pressure": "stress",
     "averaged_normal_stress": "stress", "friction_stress": "stress", "velocity": "velocity",
     "strain_rate": "strain_rate", "flow_stress": "stress", "length": "length",
+    "mean_flow_stress": "stress", "product_flow_stress": "stress", "temperature": "temperature",
+    "mean_exit_temperature": "temperature", "max_exit_temperature": "temperature",
+    "min_exit_temperature": "temperature",
 }
 
 
@@ -67,8 +70,8 @@ class Units:
         return any(getattr(self, key) is not None for key in ("length", "time", "stress", "force"))
 
     def label(self, dimension: str) -> str | None:
-        """The unit of a dimension (length, time, stress, force, velocity, strain_rate, force_per_width),
-        or None when the labels it needs are not given."""
+        """The unit of a dimension (length, time, stress, force, velocity, strain_rate, force_per_width,
+        temperature), or None when the labels it needs are not given."""
         length, time, stress, force = self.length, self.time, self.stress, self.force
         if force is None and stress is not None and length is not None:
             force = f"{stress}*{length}^2"
@@ -77,6 +80,7 @@ class Units:
             "velocity": f"{length}/{time}" if length and time else None,
             "strain_rate": f"1/{time}" if time else None,
             "force_per_width": f"{force}/{length}" if force and length else None,
+            "temperature": "K",  # kelvin in every system ([thermal], thermal.py)
         }
         return composed.get(dimension)
 
