@@ -7,13 +7,13 @@ or read from a CSV polyline of (x, y) points.
 """
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .csv_table import read_rows
 from .errors import SceneError
 
 # relative tolerance on the end heights of a CSV profile and on a land being level
@@ -182,35 +182,21 @@ def read_profile_csv(path: str | Path, key: str) -> np.ndarray:
     """The (x, y) rows of a die-profile CSV file (header ``x,y``), (N, 2). Refused, naming ``key``
     and the row: a missing file, fewer than two points, a value that is not a finite number, x not
     increasing, y rising (a diverging die) or y <= 0."""
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(key, f"must name an existing CSV file of x,y points; got {str(path)!r}")
-    with path.open(newline="") as stream:
-        rows = list(csv.reader(stream))
-    if not rows or [c.strip().lower() for c in rows[0]] != ["x", "y"]:
-        raise SceneError(key, f"{path.name}: the first row must be the header x,y")
-    points = []
-    for number, row in enumerate(rows[1:], start=2):
-        if not row or all(not c.strip() for c in row):
-            continue
-        try:
-            values = [float(c) for c in row]
-        except ValueError:
-            raise SceneError(key, f"{path.name} row {number}: not two numbers: {row}") from None
-        if len(values) != 2 or not all(math.isfinite(v) for v in values):
-            raise SceneError(key, f"{path.name} row {number}: need two finite numbers; got {row}")
+    name = Path(path).name
+    points: list[list[float]] = []
+    for number, values in read_rows(path, key, ("x", "y")):
         if values[1] <= 0:
-            raise SceneError(key, f"{path.name} row {number}: y = {values[1]} must be > 0 "
+            raise SceneError(key, f"{name} row {number}: y = {values[1]} must be > 0 "
                                   "(the half-size above the axis)")
         if points and values[0] <= points[-1][0]:
-            raise SceneError(key, f"{path.name} row {number}: x = {values[0]} must increase "
+            raise SceneError(key, f"{name} row {number}: x = {values[0]} must increase "
                                   f"(previous {points[-1][0]})")
         if points and values[1] > points[-1][1]:
-            raise SceneError(key, f"{path.name} row {number}: y = {values[1]} rises above "
+            raise SceneError(key, f"{name} row {number}: y = {values[1]} rises above "
                                   f"{points[-1][1]}: the die must converge")
         points.append(values)
     if len(points) < 2:
-        raise SceneError(key, f"{path.name}: needs at least two points; got {len(points)}")
+        raise SceneError(key, f"{name}: needs at least two points; got {len(points)}")
     return np.array(points)
 
 

@@ -149,7 +149,7 @@ class _Strip:
         for key in self.DIE_KEYS:
             if getattr(self, key) is not None:
                 raise SceneError(f"geometry.{key}", f"does not apply with geometry.mesh_file (the die is the "
-                                 f"mesh's gamma3_contact); leave it out")
+                                 "mesh's gamma3_contact); leave it out")
 
     def check_die(self) -> None:
         """The die's own data (not with a mesh file)."""

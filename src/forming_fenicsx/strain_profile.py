@@ -8,51 +8,30 @@ the run writes them: ``y [mm]``), y rising from 0 to the half-size of the sectio
 """
 from __future__ import annotations
 
-import csv
-import math
 from pathlib import Path
 
 import numpy as np
 
+from .csv_table import read_rows
 from .errors import SceneError
 
 HEADER = ("y", "equivalent_strain")
-
-
-def _name(column: str) -> str:
-    """A column header without its unit: ``y [mm]`` -> ``y``."""
-    return column.split("[", 1)[0].strip().lower()
 
 
 def read_strain_profile(path: str | Path, key: str) -> np.ndarray:
     """The (y, eps) rows of a strain-profile CSV, (N, 2). Refused, naming ``key`` and the row: a
     missing file, another header, fewer than two rows, a value that is not a finite number, y not
     rising from 0, or a negative strain."""
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(key, f"must name an existing CSV file of y,equivalent_strain rows; got "
-                              f"{str(path)!r}")
-    with path.open(newline="") as stream:
-        rows = list(csv.reader(stream))
-    if not rows or tuple(_name(c) for c in rows[0]) != HEADER:
-        raise SceneError(key, f"{path.name}: the first row must be the header y,equivalent_strain")
+    name = Path(path).name
     points: list[list[float]] = []
-    for number, row in enumerate(rows[1:], start=2):
-        if not row or all(not c.strip() for c in row):
-            continue
-        try:
-            values = [float(c) for c in row]
-        except ValueError:
-            raise SceneError(key, f"{path.name} row {number}: not two numbers: {row}") from None
-        if len(values) != 2 or not all(math.isfinite(v) for v in values):
-            raise SceneError(key, f"{path.name} row {number}: need two finite numbers; got {row}")
+    for number, values in read_rows(path, key, HEADER):
         if values[1] < 0:
-            raise SceneError(key, f"{path.name} row {number}: the strain {values[1]} must be >= 0")
+            raise SceneError(key, f"{name} row {number}: the strain {values[1]} must be >= 0")
         if (not points and values[0] != 0) or (points and values[0] <= points[-1][0]):
-            raise SceneError(key, f"{path.name} row {number}: y = {values[0]} must rise from 0")
+            raise SceneError(key, f"{name} row {number}: y = {values[0]} must rise from 0")
         points.append(values)
     if len(points) < 2:
-        raise SceneError(key, f"{path.name}: needs at least two rows; got {len(points)}")
+        raise SceneError(key, f"{name}: needs at least two rows; got {len(points)}")
     return np.array(points)
 
 

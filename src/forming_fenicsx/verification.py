@@ -240,7 +240,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": rate * length}, "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": "axisymmetric"},
-        "material": material or {"law": "rate_power", "A": RADIAL["K"], "n": n},
+        "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "formulation": formulation,
                            "averaging": "quadrature" if method == "newton" else "nodes"},
         "penalty": {"d_relative": 1e-6},
