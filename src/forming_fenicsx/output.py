@@ -14,19 +14,20 @@ from .solvers import IterationRecord
 from .units import Units
 
 
-def _json_safe(value: Any) -> Any:
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float (nested in dicts and lists) replaced by None: valid JSON."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
+        return {k: json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     return value
 
 
 def write_summary(path: Path, summary: dict[str, Any]) -> None:
     """summary.json; non-finite numbers are written as null."""
-    path.write_text(json.dumps(_json_safe(summary), indent=2) + "\n")
+    path.write_text(json.dumps(json_safe(summary), indent=2) + "\n")
 
 
 def write_history(path: Path, history: list[IterationRecord]) -> None:
