@@ -308,27 +308,41 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     }
 
 
+def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:
+    """The velocity on Lagrange elements of the geometry degree (interpolated when the element differs):
+    the form XDMF, ParaView and the flow lines read."""
+    degree = geometry_degree(problem.mesh)
+    if problem.scene.discretisation.degree == degree:
+        return problem.u
+    velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
+    velocity.interpolate(problem.u)
+    return velocity
+
+
+NON_NEGATIVE_FIELDS = ("equivalent_strain_rate", "secant_viscosity")
+
+
 def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     """Velocity, equivalent strain rate, hydrostatic pressure and secant viscosity at the mesh nodes.
 
     Scalars are nodal means (lumped projections) on Lagrange elements of the geometry degree, the
-    form XDMF and ParaView read.
+    form XDMF and ParaView read. Q2's basis functions change sign, so the nodal mean
+    (f, phi_i)/(1, phi_i) of a non-negative f can be negative where f varies steeply (-4e-3 of the
+    equivalent strain rate was seen): the non-negative fields (NON_NEGATIVE_FIELDS) are clipped at
+    zero, max(value, 0), node by node (the projection is not positivity-preserving; the clip is).
     """
-    degree = geometry_degree(problem.mesh)
-    space = function_space(problem.mesh, "P", degree)
-    velocity = problem.u
-    if problem.scene.discretisation.degree != degree:
-        velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
-        velocity.interpolate(problem.u)
+    space = function_space(problem.mesh, "P", geometry_degree(problem.mesh))
     sources = {
         "equivalent_strain_rate": (problem.equivalent_strain_rate(problem.u), problem.full_degree),
         "hydrostatic_pressure": (problem.hydrostatic_stress(), problem.volumetric_degree),
         "secant_viscosity": (problem.secant_coefficient(), problem.full_degree),
     }
-    fields = [velocity]
+    fields = [nodal_velocity(problem)]
     for name, (expr, quadrature) in sources.items():
-        target = dolfinx.fem.Function(space, name=name)
-        fields.append(LumpedProjector(expr, target, quadrature).project())
+        target = LumpedProjector(expr, dolfinx.fem.Function(space, name=name), quadrature).project()
+        if name in NON_NEGATIVE_FIELDS:
+            np.maximum(target.x.array, 0.0, out=target.x.array)
+        fields.append(target)
     return fields
 
 
