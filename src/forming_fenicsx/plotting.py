@@ -55,7 +55,7 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
     lines, every = flow_lines(*nodes)
     for line in lines:
         ax.plot(line[:, 0], line[:, 1], color="tab:blue", linewidth=1.0)
-    for index in range(every, max(len(line) for line in lines), every):
+    for index in range(every, max((len(line) for line in lines), default=0), every):
         marks = np.array([line[index] for line in lines if index < len(line)])
         if len(marks) > 1:
             ax.plot(marks[:, 0], marks[:, 1], color="0.3", linewidth=0.6)
@@ -112,9 +112,10 @@ def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray, 
     """Material lines of the steady flow: x' = u(x) integrated by classical Runge-Kutta (RK4) with a
     fixed time step from ``count`` seeds at the centres of equal bands across the entry section
     (the smallest x, y from 0 to the largest y there), u linear on the triangles through the nodes,
-    until a point leaves the workpiece. Returns the lines (positions at every step) and the number
-    of steps between time lines: marks placed every 2 (band width)/U_entry in time, which start as a
-    grid of 1 x 2 bands at the entry and show its distortion, as grid markers do."""
+    until a point leaves the workpiece or stops. Returns the lines (positions at every step; none
+    when the entry does not move) and the number of steps between time lines: marks placed every
+    2 (band width)/U_entry in time, which start as a grid of 1 x 2 bands at the entry and show its
+    distortion, as grid markers do."""
     from matplotlib.tri import LinearTriInterpolator, Triangulation
 
     mesh = Triangulation(points[:, 0], points[:, 1], triangles)
@@ -131,6 +132,8 @@ def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray, 
     inset = 1e-6 * np.ptp(points[:, 0])
     x = np.column_stack([np.full(count, start + inset), top * (np.arange(count) + 0.5) / count])
     entry_speed = np.nanmean(np.abs(u(x)[:, 0]))
+    if not entry_speed > 0:  # a run stopped before its first solve: nothing flows
+        return [], 2 * steps_per_mark
     dt = top / count / entry_speed / steps_per_mark
     fastest = np.abs(velocity).max()
     limit = int(min(3 * np.ptp(points[:, 0]) / (entry_speed * dt), 1e5))
@@ -152,7 +155,7 @@ def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray, 
 
 
 def run_settings(scene) -> str:
-    """The run's main settings for a figure title, e.g. "drawing, plane strain 2 -> 1.6 mm, die 10 deg,
+    """The run's main settings for a figure title, e.g. "drawing, strip 2 -> 1.6 mm, die 10 deg,
     mu = 0.08, Q2 h = 0.053 mm"."""
     g, f, d = scene.geometry, scene.friction, scene.discretisation
     length = scene.units.label("length")
