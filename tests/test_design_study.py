@@ -111,9 +111,26 @@ def test_die_angle_sweep_as_a_new_user(shared_tmp, monkeypatch):
 
 
 @pytest.mark.parametrize("path", ["strip_die_angle.study.toml", "wire_die_angle.study.toml"])
-def test_shipped_design_studies_name_two_quantities(path):
+def test_shipped_design_studies_name_three_quantities(path):
     data, vary, quantities = study.load_study(DEMOS / path)
-    assert quantities == ["drawing_stress", "mean_die_pressure"]
+    assert quantities == ["drawing_stress", "mean_die_pressure", "mean_exit_strain"]
     base, combinations, scenes = study.study_scenes(data, vary)
     assert len(scenes) == 10 and base.friction.law == "factor" and base.friction.m == 0.1
     assert study.is_design_key(study.parse_vary(vary)[0][0])
+
+
+def test_mean_exit_strain_balances_the_drawing_work():
+    """Frictionless strip drawing (10 deg, 2.0 -> 1.6 mm, a nearly rate-independent law): the power
+    sigma_d Q equals the plastic work sigma0 int rate dx = sigma0 Q mean_exit_strain (measured ratio
+    0.9967 at h = 0.2 exit half-thicknesses), and the mean exit strain exceeds the homogeneous
+    (2/sqrt3) ln(h0/h1) = 0.2577 by the redundant shear (measured 0.2984)."""
+    from forming_fenicsx import load_scene
+    from forming_fenicsx.run import solve_scene
+
+    scene = load_scene(DEMOS / "strip_mm.toml", ["discretisation.mesh_size_relative=0.2", "friction.mu=0",
+                                                  "output.fields=false", "output.figures=false"])
+    summary = solve_scene(scene)[2]
+    strain = summary["mean_exit_strain"]
+    assert summary["drawing_stress"] / (scene.scales.flow_stress * strain) == pytest.approx(1.0, abs=0.01)
+    homogeneous = 2 / math.sqrt(3) * math.log(2.0 / 1.6)
+    assert 1.05 * homogeneous < strain < 1.3 * homogeneous

@@ -223,6 +223,17 @@ def exit_zone_rate_ratio(problem: FlowProblem) -> float:
     return zone_mean / mean if mean > 0 else math.nan
 
 
+def mean_exit_strain(problem: FlowProblem) -> float:
+    """The flux-weighted mean equivalent strain of the product: with u.grad(eps) = rate along the
+    streamlines and div u = 0, div(eps u) = rate, so int_exit eps u.n = int rate dx over the
+    workpiece (eps = 0 entering, no flow through the die and free surfaces) and the mean is
+    int rate dx / Q, Q the throughput. Compare the homogeneous strain ln(A0/A1) (round) or
+    (2/sqrt3) ln(h0/h1) (strip): the excess is the redundant strain."""
+    through = throughput(problem)
+    return _integrate(problem, problem.equivalent_strain_rate(problem.u) * problem.dx) / through \
+        if through else math.nan
+
+
 def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:
     """For the law (4.5): the fractions of the plastic work rate int sigma_p(rate) rate dissipated at rates
     above rate2 and below rate1, where the law is linear (viscous) instead of nearly rate-independent."""
@@ -304,6 +315,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "die_penetration": die_penetration(problem),
         "die_contact_fraction": die_contact_fraction(problem),
         "exit_zone_rate_ratio": exit_zone_rate_ratio(problem),
+        "mean_exit_strain": mean_exit_strain(problem),
         **dissipation_outside_window(problem),
     }
 

@@ -61,7 +61,7 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
                 ax.plot(fine, np.polyval(np.polyfit(*through.T, 2), fine), ":", color=drawn.get_color())
                 ax.plot(optimum["location"], optimum["value"], "*", markersize=14, color=drawn.get_color(),
                         markeredgecolor="k",
-                        label=f"optimum {optimum['location']:.3g}: {optimum['value']:.4g}")
+                        label=f"optimum {optimum['location']:.4g}: {optimum['value']:.4g}")
         parameter = next(o["parameter"] for o in optima) if optima else keys[0]
         ax.set_xlabel(parameter_label(parameter, units))
         unit = units.label(units.dimension(quantity, axisymmetric))
