@@ -24,16 +24,17 @@ CASES = ("strip_die_angle", "wire_die_angle")
 
 
 def bound(scene, reduction: float):
-    """The bound's drawing stress as a function of the semi-angle, in the scene's stress unit, and its
-    optimum angle: Avitzur's cone (sigma0 times his factor) or the wedge (2k times its factor), with
-    the land's friction; sigma0 is the flow stress at the process strain rate."""
+    """The bound's drawing stress as a function of the semi-angle, in the scene's stress unit, and
+    its optimum angle: Avitzur's cone (sigma0 times his factor) or the wedge (2k times its factor),
+    with the land's friction; sigma0 is the flow stress at the process strain rate."""
     g, m = scene.geometry, scene.friction.m
     sigma0 = scene.scales.flow_stress
     land = g.land_length / (0.5 * g.exit_thickness)
     if g.axisymmetric:
         return (lambda a: sigma0 * avitzur_drawing_stress(reduction, a, m, land)), \
             avitzur_optimum_angle(reduction, m, land)
-    return (lambda a: 2 * sigma0 / math.sqrt(3) * upper_bound_strip_drawing_stress(reduction, a, m, land)), \
+    two_k = 2 * sigma0 / math.sqrt(3)
+    return (lambda a: two_k * upper_bound_strip_drawing_stress(reduction, a, m, land)), \
         strip_optimum_angle(reduction, m, land)
 
 
@@ -68,16 +69,18 @@ def main(results: Path, docs: Path) -> None:
         ax.set_ylabel(base.units.labelled("drawing stress", "stress"))
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-        rows.append([kind, f"{reduction:.3f}", f"{optimum['location']:.2f}", f"{optimum['value']:.2f}",
-                     f"{best:.2f}", f"{stress(best):.2f}", f"{optimum['value'] / stress(best):.3f}",
+        rows.append([kind, f"{reduction:.3f}", f"{optimum['location']:.2f}",
+                     f"{optimum['value']:.2f}", f"{best:.2f}", f"{stress(best):.2f}",
+                     f"{optimum['value'] / stress(best):.3f}",
                      f"{sum(r['wall_time_s'] for r in runs):.0f}"])
-        shutil.copy(results / case / "drawing_stress.png", docs / f"{case}_drawing_stress.png")
-        shutil.copy(results / case / "mean_die_pressure.png", docs / f"{case}_mean_die_pressure.png")
+        for quantity in stored["quantities"]:
+            shutil.copy(results / case / f"{quantity}.png", docs / f"{case}_{quantity}.png")
     fig.tight_layout()
     fig.savefig(docs / "design_studies.png", dpi=110)
-    print(markdown_table(None, ["product", "reduction", "FE optimum [deg]", "FE least drawing stress [MPa]",
-                                "bound's optimum [deg]", "bound at its optimum [MPa]", "FE / bound",
-                                "wall s (10 runs)"], rows))
+    print(markdown_table(None, ["product", "reduction", "FE optimum [deg]",
+                                "FE least drawing stress [MPa]", "bound's optimum [deg]",
+                                "bound at its optimum [MPa]", "FE / bound", "wall s (10 runs)"],
+                         rows))
 
 
 if __name__ == "__main__":

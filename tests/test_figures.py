@@ -1,5 +1,5 @@
-"""A run's figures and fields.xdmf: flow lines that follow the die and do not cross, die.png's labels
-and die parts, one XDMF grid carrying every field, a non-negative strain rate in the file."""
+"""A run's figures and fields.xdmf: flow lines that follow the die and do not cross, die.png's
+labels and die parts, one XDMF grid carrying every field, a non-negative strain rate in the file."""
 import json
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
@@ -15,7 +15,8 @@ from forming_fenicsx.plotting import die_parts, flow_lines
 from forming_fenicsx.run import run_scene
 
 DEMOS = Path(__file__).parents[1] / "demos"
-FIELDS = {"velocity": 3, "equivalent_strain_rate": 1, "hydrostatic_pressure": 1, "secant_viscosity": 1}
+FIELDS = {"velocity": 3, "equivalent_strain_rate": 1, "hydrostatic_pressure": 1,
+          "secant_viscosity": 1}
 
 
 @pytest.fixture(scope="module")
@@ -57,16 +58,20 @@ def test_fields_xdmf_is_one_grid_with_every_field(wire):
 
         assert dataset(geometry).shape == (nodes, 2)
         topology = grid.find("Topology")
-        assert dataset(topology.find("DataItem")).shape == (int(topology.get("NumberOfElements")), 9)
+        cells = int(topology.get("NumberOfElements"))
+        assert dataset(topology.find("DataItem")).shape == (cells, 9)
         for name, width in FIELDS.items():
             item = attributes[name].find("DataItem")
-            assert item.get("Dimensions") == f"{nodes} {width}" and attributes[name].get("Center") == "Node"
+            assert item.get("Dimensions") == f"{nodes} {width}"
+            assert attributes[name].get("Center") == "Node"
             assert dataset(item).shape == (nodes, width)
         rate = dataset(attributes["equivalent_strain_rate"].find("DataItem"))[:]
-        # clipped at zero; dolfinx 0.5's writer evaluates the nodal function at the nodes, which adds
-        # rounding (-3e-12 measured against a largest 2e3; before the clip -4e-3 of the projection)
-        assert rate.min() >= -1e-14 * rate.max() and rate.max() > 100.0  # 1/s; the process rate 500 1/s
-        assert np.abs(dataset(attributes["velocity"].find("DataItem"))[:, 0]).max() == pytest.approx(1000.0, rel=1e-3)
+        # clipped at zero; dolfinx 0.5's writer evaluates the nodal function at the nodes, which
+        # adds rounding (-3e-12 measured against a largest 2e3; before the clip -4e-3)
+        assert rate.min() >= -1e-14 * rate.max()
+        assert rate.max() > 100.0  # 1/s; the process rate is 500 1/s
+        speed = dataset(attributes["velocity"].find("DataItem"))[:, 0]
+        assert np.abs(speed).max() == pytest.approx(1000.0, rel=1e-3)  # mm/s, the drawing speed
 
 
 def test_die_plot_labels_settings_and_parts(wire):
@@ -74,11 +79,16 @@ def test_die_plot_labels_settings_and_parts(wire):
     if MPI.COMM_WORLD.rank != 0:
         return
     stresses, profile = saved["die.png"].axes
-    assert stresses.get_xlabel() == "s, distance along the die from where the workpiece meets it [mm]"
-    assert stresses.get_ylabel() == "contact pressure, averaged normal stress, friction stress [MPa]"
-    assert "wire: drawing, round 2 -> 1.8 mm, die 6 deg, mu = 0.05, Q2 h = 0.18 mm" in stresses.get_title()
-    assert profile.get_ylabel() == "radius [mm]" and profile.get_xlabel() == "x, along the axis [mm]"
-    assert [t.get_text() for t in profile.get_legend().get_texts()] == ["cone", "land", "nodes of Gamma3"]
+    assert stresses.get_xlabel() == \
+        "s, distance along the die from where the workpiece meets it [mm]"
+    assert stresses.get_ylabel() == \
+        "contact pressure, averaged normal stress, friction stress [MPa]"
+    settings = "wire: drawing, round 2 -> 1.8 mm, die 6 deg, mu = 0.05, Q2 h = 0.18 mm"
+    assert settings in stresses.get_title()
+    assert profile.get_ylabel() == "radius [mm]"
+    assert profile.get_xlabel() == "x, along the axis [mm]"
+    legend = [t.get_text() for t in profile.get_legend().get_texts()]
+    assert legend == ["cone", "land", "nodes of Gamma3"]
 
 
 def test_flow_lines_follow_the_die_and_do_not_cross(wire):
@@ -90,7 +100,8 @@ def test_flow_lines_follow_the_die_and_do_not_cross(wire):
     blue = [line.get_xydata() for line in axes.get_lines() if line.get_color() == "tab:blue"]
     assert len(blue) == 10
     scene = json.loads((out / "summary.json").read_text())["scene"]["geometry"]
-    entry, exit_radius, length = 0.5 * scene["entry_diameter"], 0.5 * scene["exit_diameter"], scene["length"]
+    entry, exit_radius = 0.5 * scene["entry_diameter"], 0.5 * scene["exit_diameter"]
+    length = scene["length"]
     for line in blue:
         assert line[-1, 0] > length - 0.05 * length  # every line reaches the exit face
     # at the entry the lines sit at the centres of ten equal bands; in the product they lie in the
@@ -108,7 +119,8 @@ def test_flow_lines_of_a_uniform_flow_are_straight_with_square_marks():
     """Two triangles over [0, 4] x [0, 1], u = (2, 0): straight lines at the band centres, marks
     every two band widths of travel."""
     points = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 1.0], [4.0, 1.0]])
-    lines, every = flow_lines(points, np.array([[0, 1, 3], [0, 3, 2]]), np.tile([2.0, 0.0], (4, 1)), count=4)
+    triangles = np.array([[0, 1, 3], [0, 3, 2]])
+    lines, every = flow_lines(points, triangles, np.tile([2.0, 0.0], (4, 1)), count=4)
     assert [line[0, 1] for line in lines] == pytest.approx([0.125, 0.375, 0.625, 0.875])
     for line in lines:
         assert np.ptp(line[:, 1]) < 1e-12 and 3.9 < line[-1, 0] <= 4.0

@@ -142,8 +142,10 @@ def upper_bound_strip_drawing_stress(reduction: float, semi_angle: float, m: flo
             + math.tan(alpha / 2) + 0.5 * m * land_over_exit_half_thickness)
 
 
-def optimum_angle(stress: Callable[[float], float], lower: float = 0.5, upper: float = 45.0) -> float:
-    """The semi-angle (degrees) minimising a unimodal ``stress(angle)``: golden section on [lower, upper]."""
+def optimum_angle(stress: Callable[[float], float], lower: float = 0.5,
+                  upper: float = 45.0) -> float:
+    """The semi-angle (degrees) minimising a unimodal ``stress(angle)``: golden section on
+    [lower, upper]."""
     golden = (math.sqrt(5) - 1) / 2
     for _ in range(80):
         a, b = upper - golden * (upper - lower), lower + golden * (upper - lower)
@@ -156,14 +158,16 @@ def optimum_angle(stress: Callable[[float], float], lower: float = 0.5, upper: f
 
 def avitzur_optimum_angle(reduction: float, m: float, land_over_exit_radius: float = 0.0) -> float:
     """The semi-angle (degrees) minimising avitzur_drawing_stress."""
-    return optimum_angle(lambda angle: avitzur_drawing_stress(reduction, angle, m, land_over_exit_radius))
+    return optimum_angle(
+        lambda angle: avitzur_drawing_stress(reduction, angle, m, land_over_exit_radius))
 
 
-def strip_optimum_angle(reduction: float, m: float, land_over_exit_half_thickness: float = 0.0) -> float:
+def strip_optimum_angle(reduction: float, m: float,
+                        land_over_exit_half_thickness: float = 0.0) -> float:
     """The semi-angle (degrees) minimising upper_bound_strip_drawing_stress (Avitzur's method for a
     wedge die)."""
-    return optimum_angle(lambda angle: upper_bound_strip_drawing_stress(reduction, angle, m,
-                                                                        land_over_exit_half_thickness))
+    return optimum_angle(lambda angle: upper_bound_strip_drawing_stress(
+        reduction, angle, m, land_over_exit_half_thickness))
 
 
 def avitzur_optimum_angle_approx(reduction: float, m: float) -> float:

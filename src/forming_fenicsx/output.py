@@ -16,7 +16,8 @@ from .units import Units
 
 
 def json_safe(value: Any) -> Any:
-    """``value`` with every non-finite float (nested in dicts and lists) replaced by None: valid JSON."""
+    """``value`` with every non-finite float (nested in dicts and lists) replaced by None: valid
+    JSON."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
@@ -62,12 +63,13 @@ def write_fields(path: Path, mesh, fields) -> None:
 
 def single_grid_xdmf(path: Path, name: str = "workpiece") -> None:
     """Rewrite an .xdmf that dolfinx wrote (a mesh grid and a grid per function, dolfinx 0.5 to 0.9)
-    as one uniform Grid holding the mesh grid's Topology and Geometry and every function's Attribute,
-    each still pointing into the same .h5 datasets."""
+    as one uniform Grid holding the mesh grid's Topology and Geometry and every function's
+    Attribute, each still pointing into the same .h5 datasets."""
     tree = ElementTree.parse(path)
     domain = tree.getroot().find("Domain")
     grids = domain.findall("Grid")
-    mesh_grid = next(g for g in grids if g.find("Topology") is not None and g.find("Geometry") is not None)
+    mesh_grid = next(g for g in grids
+                     if g.find("Topology") is not None and g.find("Geometry") is not None)
     grid = ElementTree.Element("Grid", Name=name, GridType="Uniform")
     grid.extend([mesh_grid.find("Topology"), mesh_grid.find("Geometry"),
                  *(a for g in grids if g is not mesh_grid for a in g.iter("Attribute"))])

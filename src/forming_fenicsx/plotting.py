@@ -51,7 +51,8 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
     paths = []
 
     fig, ax = plt.subplots(figsize=size)
-    ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.85", linewidths=0.3))
+    ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.85",
+                                     linewidths=0.3))
     lines, every = flow_lines(*nodes)
     for line in lines:
         ax.plot(line[:, 0], line[:, 1], color="tab:blue", linewidth=1.0)
@@ -59,8 +60,8 @@ def write_figures(problem: FlowProblem, directory: Path, title: str) -> list[Pat
         marks = np.array([line[index] for line in lines if index < len(line)])
         if len(marks) > 1:
             ax.plot(marks[:, 0], marks[:, 1], color="0.3", linewidth=0.6)
-    ax.set_title(f"{heading}\nflow lines (streamlines of the steady velocity) and time lines (grid markers)",
-                 fontsize=9)
+    ax.set_title(f"{heading}\nflow lines (streamlines of the steady velocity) and time lines "
+                 "(grid markers)", fontsize=9)
     paths.append(_finish(fig, ax, outlines, directory / "velocity.png", units))
 
     fig, ax = plt.subplots(figsize=size)
@@ -101,14 +102,14 @@ def _gather_velocity_nodes(problem: FlowProblem):
 
 
 # dolfinx's quadrilateral node order: vertices (0, 0), (1, 0), (0, 1), (1, 1), then Q2's edge
-# midpoints of the edges 0-1, 0-2, 1-3, 2-3 and the centre, i.e. the 3 x 3 rows 0 4 1 / 5 8 6 / 2 7 3
+# midpoints of the edges 0-1, 0-2, 1-3, 2-3 and the centre: the 3 x 3 rows 0 4 1 / 5 8 6 / 2 7 3
 SUB_TRIANGLES = {4: np.array([[0, 1, 3], [0, 3, 2]]),
                  9: np.array([[0, 4, 8], [0, 8, 5], [4, 1, 6], [4, 6, 8], [5, 8, 7], [5, 7, 2],
                               [8, 6, 3], [8, 3, 7]])}
 
 
-def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray, count: int = FLOW_LINES,
-               steps_per_mark: int = 20) -> tuple[list[np.ndarray], int]:
+def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray,
+               count: int = FLOW_LINES, steps_per_mark: int = 20) -> tuple[list[np.ndarray], int]:
     """Material lines of the steady flow: x' = u(x) integrated by classical Runge-Kutta (RK4) with a
     fixed time step from ``count`` seeds at the centres of equal bands across the entry section
     (the smallest x, y from 0 to the largest y there), u linear on the triangles through the nodes,
@@ -161,10 +162,11 @@ def run_settings(scene) -> str:
     length = scene.units.label("length")
     unit = f" {length}" if length else ""
     shape = "round" if g.axisymmetric else "strip"
-    die = f", die {g.die_angle:g} deg" if getattr(g, "die_angle", None) is not None else f", {g.die} die"
+    angle = getattr(g, "die_angle", None)
+    die = f", die {angle:g} deg" if angle is not None else f", {g.die} die"
     friction = f"m = {f.m:g}" if f.law == "factor" else f"mu = {f.mu:g}"
-    return (f"{scene.process.kind}, {shape} {g.entry_thickness:.4g} -> {g.exit_thickness:.4g}{unit}{die}, "
-            f"{friction}, {d.element} h = {d.mesh_size:.2g}{unit}")
+    return (f"{scene.process.kind}, {shape} {g.entry_thickness:.4g} -> {g.exit_thickness:.4g}"
+            f"{unit}{die}, {friction}, {d.element} h = {d.mesh_size:.2g}{unit}")
 
 
 def _finish(fig, ax, outlines: np.ndarray, path: Path, units: Units) -> Path:
@@ -182,13 +184,15 @@ def _finish(fig, ax, outlines: np.ndarray, path: Path, units: Units) -> Path:
     return path
 
 
-DIE_PARTS = {"container wall": "tab:green", "die face": "tab:red", "cone": "tab:purple", "land": "tab:brown"}
+DIE_PARTS = {"container wall": "tab:green", "die face": "tab:red", "cone": "tab:purple",
+             "land": "tab:brown"}
 
 
 def die_parts(x: np.ndarray, y: np.ndarray) -> list[str]:
     """The part of the die each segment between consecutive nodes of Gamma3 lies on, by its slope:
-    "die face" (within 10 deg of the normal to the axis, a square die's face), level (within 1 deg of
-    the axis: the "container wall" before the first inclined segment, the "land" after it), else "cone"."""
+    "die face" (within 10 deg of the normal to the axis, a square die's face), level (within 1 deg
+    of the axis: the "container wall" before the first inclined segment, the "land" after it),
+    else "cone"."""
     slope = np.degrees(np.arctan2(np.abs(np.diff(y)), np.abs(np.diff(x))))
     parts, reached = [], False
     for angle in slope:
@@ -203,10 +207,10 @@ def die_parts(x: np.ndarray, y: np.ndarray) -> list[str]:
 
 
 def write_die_plot(profile: dict, path: Path, title: str, scene) -> Path:
-    """die.png: the stresses on the die (contact pressure, averaged normal stress and friction stress,
-    as present) along the die coordinate s, over bands marking the part of the die (die_parts), and
-    below it the die profile y(x) through the nodes of Gamma3 (die.csv's x and y), coloured by part;
-    axes with the scene's units, the run's main settings in the title."""
+    """die.png: the stresses on the die (contact pressure, averaged normal stress and friction
+    stress, as present) along the die coordinate s, over bands marking the part of the die
+    (die_parts), and below it the die profile y(x) through the nodes of Gamma3 (die.csv's x and y),
+    coloured by part; axes with the scene's units, the run's main settings in the title."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -220,10 +224,11 @@ def write_die_plot(profile: dict, path: Path, title: str, scene) -> Path:
     parts = die_parts(profile["x"], profile["y"])
     for index, part in enumerate(parts):
         first = index == parts.index(part)
-        ax.axvspan(profile["s"][index], profile["s"][index + 1], color=DIE_PARTS[part], alpha=0.12, lw=0,
-                   label=part if first else None)
-        shape.plot(profile["x"][index:index + 2], profile["y"][index:index + 2], "-", color=DIE_PARTS[part],
-                   linewidth=2.5, label=part if first else None)
+        label = part if first else None
+        ax.axvspan(profile["s"][index], profile["s"][index + 1], color=DIE_PARTS[part], alpha=0.12,
+                   lw=0, label=label)
+        shape.plot(profile["x"][index:index + 2], profile["y"][index:index + 2], "-",
+                   color=DIE_PARTS[part], linewidth=2.5, label=label)
     for key in shown:
         ax.plot(profile["s"], profile[key], marker=".", label="".join(names[key]))
     ax.set_xlabel(units.labelled("s, distance along the die from where the workpiece meets it", "length"))
@@ -233,7 +238,8 @@ def write_die_plot(profile: dict, path: Path, title: str, scene) -> Path:
     ax.legend(fontsize=8)
     shape.plot(profile["x"], profile["y"], "k.", markersize=1.5, label="nodes of Gamma3")
     shape.set_xlabel(units.labelled("x, along the axis", "length"))
-    shape.set_ylabel(units.labelled("radius" if scene.geometry.axisymmetric else "half-thickness", "length"))
+    size = "radius" if scene.geometry.axisymmetric else "half-thickness"
+    shape.set_ylabel(units.labelled(size, "length"))
     shape.set_ylim(bottom=0.0)
     shape.set_title("die profile", fontsize=9)
     shape.grid(True, alpha=0.3)

@@ -321,12 +321,13 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
 
 
 def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:
-    """The velocity on Lagrange elements of the geometry degree (interpolated when the element differs):
-    the form XDMF, ParaView and the flow lines read."""
+    """The velocity on Lagrange elements of the geometry degree (interpolated when the element
+    differs): the form XDMF, ParaView and the flow lines read."""
     degree = geometry_degree(problem.mesh)
     if problem.scene.discretisation.degree == degree:
         return problem.u
-    velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
+    space = function_space(problem.mesh, "P", degree, (2,))
+    velocity = dolfinx.fem.Function(space, name="velocity")
     velocity.interpolate(problem.u)
     return velocity
 

@@ -1,4 +1,4 @@
-"""`forming study`: a grid of runs of one scene over varied keys, each with its quantities and its cost.
+"""`forming study`: a grid of runs of one scene over varied keys, each with its quantities and cost.
 
 Two kinds of study, told apart by the varied keys:
 - a speed-accuracy study varies numerical keys only (sections discretisation, solver, penalty,
@@ -58,7 +58,8 @@ def parse_quantities(texts: str | list[str] | None) -> list[str]:
     """Quantity names from ``a,b`` strings or a list of them, in order, each once."""
     if texts is None:
         return []
-    names = [n.strip() for t in ([texts] if isinstance(texts, str) else texts) for n in t.split(",")]
+    texts = [texts] if isinstance(texts, str) else texts
+    names = [name.strip() for text in texts for name in text.split(",")]
     if not all(names):
         raise SceneError("--quantity", "needs summary keys separated by commas")
     return list(dict.fromkeys(names))
@@ -72,9 +73,9 @@ def is_design_key(key: str) -> bool:
 def load_study(path: str | Path, overrides: list[str] | None = None
                ) -> tuple[dict[str, Any], list[str], list[str]]:
     """A study file: a ``[study]`` table with ``scene`` (relative to the file), ``vary`` (a table of
-    key = [values]), optional ``set`` (a list of overrides) and ``quantity`` (a summary key or a list
-    of them). Returns the scene document (with ``set`` and then ``overrides`` applied), the --vary
-    strings and the quantities (empty: the process's default)."""
+    key = [values]), optional ``set`` (a list of overrides) and ``quantity`` (a summary key or a
+    list of them). Returns the scene document (with ``set`` and then ``overrides`` applied), the
+    --vary strings and the quantities (empty: the process's default)."""
     path = Path(path)
     try:
         table = tomllib.loads(path.read_text()).get("study")
@@ -84,11 +85,13 @@ def load_study(path: str | Path, overrides: list[str] | None = None
         raise SceneError("study", f"{path} has no [study] table")
     unknown = set(table) - {"scene", "vary", "set", "quantity"}
     if unknown:
-        raise SceneError(f"study.{sorted(unknown)[0]}", "unknown key (known: scene, vary, set, quantity)")
+        raise SceneError(f"study.{sorted(unknown)[0]}",
+                         "unknown key (known: scene, vary, set, quantity)")
     if not isinstance(table.get("scene"), str):
         raise SceneError("study.scene", "must name the scene file (relative to the study file)")
     vary, settings = table.get("vary"), table.get("set", [])
-    if not isinstance(vary, dict) or not vary or not all(isinstance(v, list) and v for v in vary.values()):
+    if not (isinstance(vary, dict) and vary
+            and all(isinstance(v, list) and v for v in vary.values())):
         raise SceneError("study.vary", "must be a table of section.key = [value, ...]")
     if not (isinstance(settings, list) and all(isinstance(o, str) for o in settings)):
         raise SceneError("study.set", "must be a list of \"section.key=value\" strings")
@@ -108,12 +111,14 @@ def _toml_value(value: Any) -> str:
 def exact_value(scene, quantity: str) -> float | None:
     """The exact value of ``quantity`` where a slip-line field is exact (verification.md):
     - frictionless square-die extrusion at reduction 1/2: Hill's ram pressure (1 + pi/2) k;
-    - frictionless drawing without back tension at r = 2 sin(a)/(1 + 2 sin(a)) for the die semi-angle
-      a: one triangle and a centred fan, q = 2k(1 + a)(1 - r), drawing stress 2k(1 + a) r.
+    - frictionless drawing without back tension at r = 2 sin(a)/(1 + 2 sin(a)) for the die
+      semi-angle a: one triangle and a centred fan, q = 2k(1 + a)(1 - r), drawing stress
+      2k(1 + a) r.
     Both are plane-strain fields: a round bar (symmetry = "axisymmetric") has none."""
     geometry, process = scene.geometry, scene.process
     rough = scene.friction.mu != 0 or scene.friction.m != 0
-    if rough or process.applied_force is not None or geometry.mesh_file is not None or geometry.axisymmetric:
+    if (rough or process.applied_force is not None or geometry.mesh_file is not None
+            or geometry.axisymmetric):
         return None
     k = scene.material.flow_stress([1.0])[0] / math.sqrt(3.0)
     if (process.kind == "extrusion" and quantity == "ram_pressure" and geometry.die == "square"
@@ -139,9 +144,9 @@ def _settings_key(settings: dict[str, str], skip: tuple[str, ...] = ()) -> str:
 
 
 def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
-    """Set every row's ``reference``: for each quantity its value, kind (exact, Richardson from the three
-    finest mesh sizes of the same other settings, or none) and relative error (in place; the exact
-    values are the rows' ``exact``)."""
+    """Set every row's ``reference``: for each quantity its value, kind (exact, Richardson from the
+    three finest mesh sizes of the same other settings, or none) and relative error (in place; the
+    exact values are the rows' ``exact``)."""
     groups: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault(_settings_key(row["settings"], (MESH_KEY,)), []).append(row)
@@ -149,7 +154,8 @@ def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     for quantity, group in itertools.product(quantities, groups.values()):
         ranked = sorted((r for r in group if r["converged"] and math.isfinite(value(r, quantity))),
                         key=lambda r: -float(r["settings"].get(MESH_KEY, math.inf)))
-        limit = richardson([value(r, quantity) for r in ranked])[0] if len(ranked) >= 3 else math.nan
+        values = [value(r, quantity) for r in ranked]
+        limit = richardson(values)[0] if len(values) >= 3 else math.nan
         for row in group:
             exact = row["exact"].get(quantity)
             if exact is not None:
@@ -158,7 +164,8 @@ def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
                 reference, kind = limit, "richardson (three finest mesh sizes)"
             else:
                 reference, kind = math.nan, "none"
-            error = abs(value(row, quantity) / reference - 1) if math.isfinite(reference) else math.nan
+            error = abs(value(row, quantity) / reference - 1) if math.isfinite(reference) \
+                else math.nan
             row["reference"][quantity] = {"value": reference, "kind": kind, "relative_error": error}
 
 
@@ -172,13 +179,15 @@ def has_reference(rows: list[dict[str, Any]], quantity: str) -> bool:
     return any(math.isfinite(relative_error(r, quantity)) for r in rows)
 
 
-def study_scenes(data: dict[str, Any], vary: list[str]) -> tuple[Scene, list[tuple[str, ...]], list[Scene]]:
-    """The unvaried scene, every combination of the varied overrides and its scene, all validated before
-    anything is solved (a SceneError names the first bad key)."""
+def study_scenes(data: dict[str, Any], vary: list[str]
+                 ) -> tuple[Scene, list[tuple[str, ...]], list[Scene]]:
+    """The unvaried scene, every combination of the varied overrides and its scene, all validated
+    before anything is solved (a SceneError names the first bad key)."""
     grid = parse_vary(vary)
     combinations = list(itertools.product(*[values for _, values in grid]))
     base = scene_from_dict(json.loads(json.dumps(data)))  # validates the unvaried scene first
-    scenes = [scene_from_dict(apply_overrides(json.loads(json.dumps(data)), list(c))) for c in combinations]
+    scenes = [scene_from_dict(apply_overrides(json.loads(json.dumps(data)), list(c)))
+              for c in combinations]
     return base, combinations, scenes
 
 
@@ -188,12 +197,13 @@ def run_folder(settings: dict[str, str]) -> str:
     return re.sub(r"[^A-Za-z0-9_=.,+-]+", "-", text)
 
 
-def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | list[str] | None = None,
-              comm: MPI.Comm = MPI.COMM_WORLD, keep_runs: bool = False) -> list[dict[str, Any]]:
-    """Run every combination of the varied values (skipping those already in out/study.json) and write
-    study.json, study.csv, study.md and the figures. ``quantity``: a summary key or a list of them
-    (default: the process's); ``keep_runs``: each run writes its own folder out/runs/<settings>
-    (run_scene's files), else only its numbers are kept."""
+def run_study(data: dict[str, Any], vary: list[str], out: Path,
+              quantity: str | list[str] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
+              keep_runs: bool = False) -> list[dict[str, Any]]:
+    """Run every combination of the varied values (skipping those already in out/study.json) and
+    write study.json, study.csv, study.md and the figures. ``quantity``: a summary key or a list
+    of them (default: the process's); ``keep_runs``: each run writes its own folder
+    out/runs/<settings> (run_scene's files), else only its numbers are kept."""
     base, combinations, scenes = study_scenes(data, vary)
     quantities = parse_quantities(quantity) or [QUANTITIES[base.process.kind]]
     keys = [override.split("=", 1)[0] for override in combinations[0]]  # the varied keys, in order
@@ -211,23 +221,24 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | 
             row = {"settings": settings}
             if keep_runs:
                 row["output"] = f"runs/{run_folder(settings)}"
-                summary = run_scene(scene, out / row["output"], comm=comm, title=run_folder(settings),
-                                    overwrite=True)
+                summary = run_scene(scene, out / row["output"], comm=comm,
+                                    title=run_folder(settings), overwrite=True)
             else:
                 summary = solve_scene(scene, comm=comm)[2]
             missing = [q for q in quantities if not isinstance(summary.get(q), (int, float))]
             if missing:
                 known = ", ".join(k for k, v in summary.items() if isinstance(v, float))
-                raise SceneError("--quantity", f"{missing[0]} is not a number of this run's summary "
-                                 f"(known: {known})")
+                raise SceneError("--quantity", f"{missing[0]} is not a number of this run's "
+                                 f"summary (known: {known})")
             rows[key] = {**row, **{k: v for k, v in summary.items() if k != "scene"}}
             if comm.rank == 0:
                 _write_json(store, {"quantities": quantities, "runs": list(rows.values())})
         elapsed = time.perf_counter() - start
         if comm.rank == 0:
             numbers = ", ".join(f"{q} {value(rows[key], q):.5g}" for q in quantities)
-            log.info("run %d of %d (%s): %s; %.0f s elapsed, about %.0f s left", index, len(combinations),
-                     run_folder(settings), numbers, elapsed, elapsed / index * (len(combinations) - index))
+            left = elapsed / index * (len(combinations) - index)
+            log.info("run %d of %d (%s): %s; %.0f s elapsed, about %.0f s left", index,
+                     len(combinations), run_folder(settings), numbers, elapsed, left)
     ordered = [rows[_settings_key(dict(o.split("=", 1) for o in c))] for c in combinations]
     for row, scene in zip(ordered, scenes, strict=True):
         row["exact"] = {q: exact_value(scene, q) for q in quantities}
@@ -237,14 +248,16 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path, quantity: str | 
     if comm.rank == 0:
         from .study_figures import pareto_plot, quantity_plots
 
-        _write_json(store, {"kind": "design" if design else "speed-accuracy", "quantities": quantities,
-                            "varied": keys, "optima": optima, "runs": ordered})
+        _write_json(store, {"kind": "design" if design else "speed-accuracy",
+                            "quantities": quantities, "varied": keys, "optima": optima,
+                            "runs": ordered})
         _write_csv(out / "study.csv", ordered, quantities, keys)
         with_reference = [q for q in quantities if has_reference(ordered, q)]
         if with_reference:
             pareto_plot(out / "pareto.png", ordered, with_reference, keys)
         if design:
-            quantity_plots(out, ordered, quantities, keys, optima, base.units, base.geometry.axisymmetric)
+            quantity_plots(out, ordered, quantities, keys, optima, base.units,
+                           base.geometry.axisymmetric)
         (out / "study.md").write_text(report(ordered, quantities, optima, base.units,
                                              base.geometry.axisymmetric) + "\n")
     return ordered
@@ -260,8 +273,8 @@ def interior_minimum(xs: list[float], ys: list[float]
     """Location and value of the vertex of the parabola through the least of ``ys`` and its two
     neighbours (``xs`` increasing): with divided differences f[x0,x1], f[x0,x1,x2] = a, the parabola
     y1 + f[x1,x2](x - x1) + a (x - x1)(x - x2) has its vertex where its slope is zero. None when the
-    least value is at either end of the grid (no interior minimum) or the three points are not convex;
-    else (location, value, the three points)."""
+    least value is at either end of the grid (no interior minimum) or the three points are not
+    convex; else (location, value, the three points)."""
     finite = [(x, y) for x, y in zip(xs, ys, strict=True) if math.isfinite(y)]
     if len(finite) < 3:
         return None
@@ -288,10 +301,10 @@ def numeric(text: str) -> float | None:
 
 def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
            ) -> list[tuple[str, list[float], list[float], str]]:
-    """The lines of a design study's plot of ``quantity`` against its first design key, sorted along it:
-    (label of the other keys' setting, parameter values, converged values, kind) with kind "runs";
-    where the rows have a reference also its line per setting of the other keys but the mesh size
-    (kind "reference: <kind>")."""
+    """The lines of a design study's plot of ``quantity`` against its first design key, sorted
+    along it: (label of the other keys' setting, parameter values, converged values, kind) with
+    kind "runs"; where the rows have a reference also its line per setting of the other keys but
+    the mesh size (kind "reference: <kind>")."""
     parameter = next(k for k in keys if is_design_key(k))
     others = [k for k in keys if k != parameter]
     lines = []
@@ -308,7 +321,8 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
                 label_of = found.get("kind", "none")
             if x is None or not math.isfinite(y):
                 continue
-            label = ", ".join(f"{k.split('.')[-1]} = {row['settings'][k]}" for k in others if k not in skip)
+            label = ", ".join(f"{k.split('.')[-1]} = {row['settings'][k]}"
+                              for k in others if k not in skip)
             grouped.setdefault(label, []).append((x, y, label_of))
         for label, points in grouped.items():
             points = sorted(set(points))
@@ -319,26 +333,27 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
     return lines
 
 
-def find_optima(rows: list[dict[str, Any]], quantities: list[str], keys: list[str]) -> list[dict[str, Any]]:
-    """For every quantity and line of ``series``: the interior minimum (location, value and the three
-    points of the parabola; None each where there is none)."""
+def find_optima(rows: list[dict[str, Any]], quantities: list[str], keys: list[str]
+                ) -> list[dict[str, Any]]:
+    """For every quantity and line of ``series``: the interior minimum (location, value and the
+    three points of the parabola; None each where there is none)."""
     parameter = next(k for k in keys if is_design_key(k))
     found = []
     for quantity in quantities:
         for label, xs, ys, kind in series(rows, quantity, keys):
             minimum = interior_minimum(xs, ys)
-            found.append({"quantity": quantity, "parameter": parameter, "others": label, "line": kind,
-                          "location": minimum[0] if minimum else None,
+            found.append({"quantity": quantity, "parameter": parameter, "others": label,
+                          "line": kind, "location": minimum[0] if minimum else None,
                           "value": minimum[1] if minimum else None,
                           "through": minimum[2] if minimum else None})
     return found
 
 
-def cheapest(rows: list[dict[str, Any]], quantities: list[str], levels: tuple[float, ...] = ERROR_LEVELS
-             ) -> list[dict[str, Any]]:
-    """For each setting of the design keys and each error level, the converged run of least wall time
-    whose relative error of every quantity with a reference is within it (None where no run reaches
-    the level). ``error`` is that run's largest relative error."""
+def cheapest(rows: list[dict[str, Any]], quantities: list[str],
+             levels: tuple[float, ...] = ERROR_LEVELS) -> list[dict[str, Any]]:
+    """For each setting of the design keys and each error level, the converged run of least wall
+    time whose relative error of every quantity with a reference is within it (None where no run
+    reaches the level). ``error`` is that run's largest relative error."""
     measured = [q for q in quantities if has_reference(rows, q)]
     design = [k for k in rows[0]["settings"] if is_design_key(k)] if rows else []
     groups: dict[str, list[dict[str, Any]]] = {}
@@ -346,12 +361,14 @@ def cheapest(rows: list[dict[str, Any]], quantities: list[str], levels: tuple[fl
         groups.setdefault(json.dumps([row["settings"][k] for k in design]), []).append(row)
     found = []
     for point, group in groups.items():
-        errors = [(max(relative_error(r, q) for q in measured), r) for r in group if r.get("converged")]
+        errors = [(max(relative_error(r, q) for q in measured), r)
+                  for r in group if r.get("converged")]
         for level in levels:
             within = [(e, r) for e, r in errors if math.isfinite(e) and e <= level]
-            best = min(within, key=lambda item: item[1]["wall_time_s"]) if within else (math.nan, None)
-            found.append({"design": dict(zip(design, json.loads(point), strict=True)), "level": level,
-                          "error": best[0], "run": best[1]})
+            best = min(within, key=lambda item: item[1]["wall_time_s"]) if within \
+                else (math.nan, None)
+            found.append({"design": dict(zip(design, json.loads(point), strict=True)),
+                          "level": level, "error": best[0], "run": best[1]})
     return found
 
 
@@ -360,19 +377,21 @@ def _unit_label(units: Units, name: str, axisymmetric: bool) -> str:
     return f"{name} [{unit}]" if unit else name
 
 
-def report(rows: list[dict[str, Any]], quantities: list[str], optima: list[dict[str, Any]] | None = None,
-           units: Units | None = None, axisymmetric: bool = False) -> str:
-    """Markdown: every run (a design study's in parameter order, a speed-accuracy study's by wall time)
-    with its quantities, their errors and references where there are any, whether it converged and its
-    cost; a design study's interior optima; the cheapest converged setting per error level (per design
-    point) where a reference exists."""
+def report(rows: list[dict[str, Any]], quantities: list[str],
+           optima: list[dict[str, Any]] | None = None, units: Units | None = None,
+           axisymmetric: bool = False) -> str:
+    """Markdown: every run (a design study's in parameter order, a speed-accuracy study's by wall
+    time) with its quantities, their errors and references where there are any, whether it
+    converged and its cost; a design study's interior optima; the cheapest converged setting per
+    error level (per design point) where a reference exists."""
     units = units or Units()
     keys = list(rows[0]["settings"]) if rows else []
     design = any(is_design_key(k) for k in keys)
     measured = [q for q in quantities if has_reference(rows, q)]
     header = [*keys]
     for q in quantities:
-        header += [_unit_label(units, q, axisymmetric)] + (["error", "reference"] if q in measured else [])
+        header += [_unit_label(units, q, axisymmetric)]
+        header += ["error", "reference"] if q in measured else []
     header += ["converged", "wall s", "linear solves", "dofs"]
     lines = []
     for r in rows if design else sorted(rows, key=lambda r: r["wall_time_s"]):
@@ -381,8 +400,8 @@ def report(rows: list[dict[str, Any]], quantities: list[str], optima: list[dict[
             line.append(f"{value(r, q):.5g}")
             if q in measured:
                 line += [f"{100 * relative_error(r, q):.2f}%", r["reference"][q]["kind"]]
-        lines.append([*line, "yes" if r["converged"] else "no", f"{r['wall_time_s']:.2f}", r["linear_solves"],
-                      r["dofs"]])
+        lines.append([*line, "yes" if r["converged"] else "no", f"{r['wall_time_s']:.2f}",
+                      r["linear_solves"], r["dofs"]])
     parts = [markdown_table(None, header, lines)]
     if design:
         parts.append(_optima_table(optima or [], units, axisymmetric))
@@ -401,8 +420,9 @@ def _optima_table(optima: list[dict[str, Any]], units: Units, axisymmetric: bool
     lines = [[_unit_label(units, o["quantity"], axisymmetric), o["others"] or "-", o["line"],
               "no interior optimum" if o["location"] is None else f"{o['location']:.4g}",
               "" if o["value"] is None else f"{o['value']:.5g}"] for o in optima]
-    return markdown_table(None, ["quantity", "other settings", "line", f"optimum {parameter.split('.')[-1]}",
-                                 "least value (parabola)"], lines)
+    header = ["quantity", "other settings", "line", f"optimum {parameter.split('.')[-1]}",
+              "least value (parabola)"]
+    return markdown_table(None, header, lines)
 
 
 def _cheapest_table(rows: list[dict[str, Any]], quantities: list[str], keys: list[str]) -> str:
@@ -415,23 +435,28 @@ def _cheapest_table(rows: list[dict[str, Any]], quantities: list[str], keys: lis
         if r is None:
             lines.append([*point, level, "none reaches it", "", "", "", ""])
         else:
-            setting = ", ".join(f"{k.split('.')[-1]} = {v}" for k, v in r["settings"].items() if k not in design)
-            lines.append([*point, level, setting or "-", f"{100 * entry['error']:.2f}%", f"{r['wall_time_s']:.2f}",
-                          r["linear_solves"], r["dofs"]])
-    return markdown_table(None, [*design, "error within", "cheapest setting", "error", "wall s", "linear solves",
-                                 "dofs"], lines)
+            setting = ", ".join(f"{k.split('.')[-1]} = {v}" for k, v in r["settings"].items()
+                                if k not in design)
+            lines.append([*point, level, setting or "-", f"{100 * entry['error']:.2f}%",
+                          f"{r['wall_time_s']:.2f}", r["linear_solves"], r["dofs"]])
+    return markdown_table(None, [*design, "error within", "cheapest setting", "error", "wall s",
+                                 "linear solves", "dofs"], lines)
 
 
-def _write_csv(path: Path, rows: list[dict[str, Any]], quantities: list[str], keys: list[str]) -> None:
-    """study.csv: settings, each quantity (with its reference, kind and relative error where the study
-    has references for it), convergence and cost, and the run's folder when kept."""
+def _write_csv(path: Path, rows: list[dict[str, Any]], quantities: list[str],
+               keys: list[str]) -> None:
+    """study.csv: settings, each quantity (with its reference, kind and relative error where the
+    study has references for it), convergence and cost, and the run's folder when kept."""
     import csv
 
     measured = [q for q in quantities if has_reference(rows, q)]
     columns = [*keys]
     for q in quantities:
-        columns += [q] + ([f"{q}_reference", f"{q}_reference_kind", f"{q}_relative_error"] if q in measured else [])
-    tail = ["converged", "wall_time_s", "linear_solves", "dofs"] + (["output"] if "output" in rows[0] else [])
+        columns.append(q)
+        if q in measured:
+            columns += [f"{q}_reference", f"{q}_reference_kind", f"{q}_relative_error"]
+    tail = ["converged", "wall_time_s", "linear_solves", "dofs"]
+    tail += ["output"] if "output" in rows[0] else []
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(columns + tail)

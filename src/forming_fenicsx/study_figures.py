@@ -1,5 +1,5 @@
-"""Figures of `forming study`: the Pareto plot of a study with references and, for a design study, each
-quantity against the design parameter with its interior optimum."""
+"""Figures of `forming study`: the Pareto plot of a study with references and, for a design study,
+each quantity against the design parameter with its interior optimum."""
 from __future__ import annotations
 
 import itertools
@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .study import MESH_KEY, relative_error, series
+from .study import MESH_KEY, is_design_key, relative_error, series
 from .units import Units
 
 NOT_LENGTHS = ("symmetry", "die", "mesh_file", "die_profile_file")
@@ -25,8 +25,8 @@ def _pyplot():
 
 
 def parameter_label(key: str, units: Units) -> str:
-    """An axis label for a varied scene key: angles in degrees, geometry sizes in the length unit, the
-    process velocity in its unit, other keys by name."""
+    """An axis label for a varied scene key: angles in degrees, geometry sizes in the length unit,
+    the process velocity in its unit, other keys by name."""
     name = key.split(".")[-1]
     if name.endswith("angle"):
         return f"{name.replace('_', ' ')} [deg]"
@@ -39,34 +39,36 @@ def parameter_label(key: str, units: Units) -> str:
 
 def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str], keys: list[str],
                    optima: list[dict[str, Any]], units: Units, axisymmetric: bool) -> list[Path]:
-    """<quantity>.png for each quantity: its converged values against the first design key, one line per
-    setting of the other keys, the reference per design point (dashed) where there is one, and each
-    line's interior optimum (a star at the vertex of the dotted parabola through the least value and its
-    neighbours)."""
+    """<quantity>.png for each quantity: its converged values against the first design key, one
+    line per setting of the other keys, the reference per design point (dashed) where there is
+    one, and each line's interior optimum (a star at the vertex of the dotted parabola through the
+    least value and its neighbours)."""
     plt = _pyplot()
+    parameter = next(k for k in keys if is_design_key(k))
+    name = parameter.split(".")[-1].replace("_", " ")
     paths = []
     for quantity in quantities:
         fig, ax = plt.subplots(figsize=(8, 5))
         lines = series(rows, quantity, keys)
         for (label, xs, ys, kind), marker in zip(lines, itertools.cycle("osD^v<>p")):
-            reference = kind != "runs"
-            shown = f"{kind}{', ' + label if label else ''}" if reference else (label or quantity)
-            drawn = ax.plot(xs, ys, "k--" if reference else "-", marker=None if reference else marker,
+            runs = kind == "runs"
+            shown = (label or quantity) if runs else f"{kind}{', ' + label if label else ''}"
+            drawn = ax.plot(xs, ys, "-" if runs else "k--", marker=marker if runs else None,
                             label=shown)[0]
             optimum = next((o for o in optima if o["quantity"] == quantity and o["others"] == label
                             and o["line"] == kind and o["location"] is not None), None)
             if optimum is not None:
                 through = np.array(optimum["through"])
                 fine = np.linspace(through[0, 0], through[-1, 0], 50)
-                ax.plot(fine, np.polyval(np.polyfit(*through.T, 2), fine), ":", color=drawn.get_color())
-                ax.plot(optimum["location"], optimum["value"], "*", markersize=14, color=drawn.get_color(),
-                        markeredgecolor="k",
+                parabola = np.polyval(np.polyfit(*through.T, 2), fine)
+                ax.plot(fine, parabola, ":", color=drawn.get_color())
+                ax.plot(optimum["location"], optimum["value"], "*", markersize=14,
+                        color=drawn.get_color(), markeredgecolor="k",
                         label=f"optimum {optimum['location']:.4g}: {optimum['value']:.4g}")
-        parameter = next(o["parameter"] for o in optima) if optima else keys[0]
         ax.set_xlabel(parameter_label(parameter, units))
         unit = units.label(units.dimension(quantity, axisymmetric))
         ax.set_ylabel(f"{quantity.replace('_', ' ')}{f' [{unit}]' if unit else ''}")
-        ax.set_title(f"{quantity.replace('_', ' ')} against {parameter.split('.')[-1].replace('_', ' ')}")
+        ax.set_title(f"{quantity.replace('_', ' ')} against {name}")
         ax.grid(True, alpha=0.3)
         if lines:
             ax.legend(fontsize=8)
@@ -78,11 +80,13 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
     return paths
 
 
-def pareto_plot(path: Path, rows: list[dict[str, Any]], quantities: list[str], keys: list[str]) -> Path:
-    """Wall time against relative error, log-log, a panel per quantity with a reference, one line per
-    setting of the varied keys but the mesh size."""
+def pareto_plot(path: Path, rows: list[dict[str, Any]], quantities: list[str],
+                keys: list[str]) -> Path:
+    """Wall time against relative error, log-log, a panel per quantity with a reference, one line
+    per setting of the varied keys but the mesh size."""
     plt = _pyplot()
-    fig, axes = plt.subplots(1, len(quantities), figsize=(9 + 4 * (len(quantities) - 1), 5), squeeze=False)
+    width = 9 + 4 * (len(quantities) - 1)
+    fig, axes = plt.subplots(1, len(quantities), figsize=(width, 5), squeeze=False)
     others = [k for k in keys if k != MESH_KEY]
     for ax, quantity in zip(axes[0], quantities, strict=True):
         lines: dict[str, list[tuple[float, float]]] = {}
@@ -97,8 +101,9 @@ def pareto_plot(path: Path, rows: list[dict[str, Any]], quantities: list[str], k
         ax.set_ylabel(f"relative error of {quantity}")
         ax.grid(True, which="both", alpha=0.3)
         if lines and ax is axes[0][-1]:
-            ax.legend(fontsize=8, title=", ".join(k.split(".")[-1] for k in others) or None, title_fontsize=8,
-                      loc="upper left", bbox_to_anchor=(1.02, 1.0))
+            title = ", ".join(k.split(".")[-1] for k in others) or None
+            ax.legend(fontsize=8, title=title, title_fontsize=8, loc="upper left",
+                      bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

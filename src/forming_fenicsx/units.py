@@ -91,8 +91,8 @@ class Units:
 
     @staticmethod
     def dimension(key: str, axisymmetric: bool = False) -> str:
-        """The dimension of a reported quantity ("" when unknown); the forces of an axisymmetric model
-        are the whole body's, not per unit width."""
+        """The dimension of a reported quantity ("" when unknown); the forces of an axisymmetric
+        model are the whole body's, not per unit width."""
         found = DIMENSIONS.get(key, "")
         return "force" if axisymmetric and found == "force_per_width" else found
 
@@ -102,6 +102,7 @@ class Units:
         if not self.given:
             return {"system": "not given: any consistent system ([units] names it; README, 'Units')"}
 
-        quantities = {key: self.label(self.dimension(key, axisymmetric)) for key in keys if key in DIMENSIONS}
+        quantities = {key: self.label(self.dimension(key, axisymmetric))
+                      for key in keys if key in DIMENSIONS}
         return {"length": self.length, "time": self.time, "stress": self.stress, "force": self.force,
                 "quantities": {key: unit for key, unit in quantities.items() if unit}}
