@@ -37,7 +37,7 @@ from .units import Units
 log = logging.getLogger(__name__)
 QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
 NUMERICAL_SECTIONS = ("discretisation", "solver", "penalty", "output")
-MESH_KEY = "discretisation.mesh_size"
+MESH_KEYS = ("discretisation.mesh_size", "discretisation.mesh_size_relative")  # absolute, relative
 ERROR_LEVELS = (0.10, 0.03, 0.01)
 
 
@@ -143,17 +143,22 @@ def _settings_key(settings: dict[str, str], skip: tuple[str, ...] = ()) -> str:
     return json.dumps({k: v for k, v in settings.items() if k not in skip}, sort_keys=True)
 
 
+def _mesh_size(settings: dict[str, str]) -> float:
+    """The varied mesh size (absolute or relative; inf when the mesh is not varied)."""
+    return next((float(settings[k]) for k in MESH_KEYS if k in settings), math.inf)
+
+
 def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     """Set every row's ``reference``: for each quantity its value, kind (exact, Richardson from the
     three finest mesh sizes of the same other settings, or none) and relative error (in place; the
     exact values are the rows' ``exact``)."""
     groups: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
-        groups.setdefault(_settings_key(row["settings"], (MESH_KEY,)), []).append(row)
+        groups.setdefault(_settings_key(row["settings"], MESH_KEYS), []).append(row)
         row["reference"] = {}
     for quantity, group in itertools.product(quantities, groups.values()):
         ranked = sorted((r for r in group if r["converged"] and math.isfinite(value(r, quantity))),
-                        key=lambda r: -float(r["settings"].get(MESH_KEY, math.inf)))
+                        key=lambda r: -_mesh_size(r["settings"]))
         values = [value(r, quantity) for r in ranked]
         limit = richardson(values)[0] if len(values) >= 3 else math.nan
         for row in group:
@@ -308,7 +313,7 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
     parameter = next(k for k in keys if is_design_key(k))
     others = [k for k in keys if k != parameter]
     lines = []
-    for skip, kind in (((), "runs"), ((MESH_KEY,), "reference")):
+    for skip, kind in (((), "runs"), (MESH_KEYS, "reference")):
         grouped: dict[str, list[tuple[float, float, str]]] = {}
         for row in rows:
             x = numeric(row["settings"][parameter])
@@ -409,7 +414,7 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
         parts.append(_cheapest_table(rows, quantities, keys))
     elif not design:
         parts.append("No reference: errors need an exact value or at least three mesh sizes "
-                     "(discretisation.mesh_size, halved each time).")
+                     "(discretisation.mesh_size or mesh_size_relative, halved each time).")
     return "\n\n".join(p for p in parts if p)
 
 

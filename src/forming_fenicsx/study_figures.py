@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .study import MESH_KEY, is_design_key, relative_error, series
+from .study import MESH_KEYS, is_design_key, relative_error, series
 from .units import Units
 
 NOT_LENGTHS = ("symmetry", "die", "mesh_file", "die_profile_file")
@@ -87,7 +87,7 @@ def pareto_plot(path: Path, rows: list[dict[str, Any]], quantities: list[str],
     plt = _pyplot()
     width = 9 + 4 * (len(quantities) - 1)
     fig, axes = plt.subplots(1, len(quantities), figsize=(width, 5), squeeze=False)
-    others = [k for k in keys if k != MESH_KEY]
+    others = [k for k in keys if k not in MESH_KEYS]
     for ax, quantity in zip(axes[0], quantities, strict=True):
         lines: dict[str, list[tuple[float, float]]] = {}
         for row in rows:
