@@ -148,3 +148,16 @@ def test_mean_exit_strain_balances_the_drawing_work():
     assert summary["drawing_stress"] / work == pytest.approx(1.0, abs=0.01)
     homogeneous = 2 / math.sqrt(3) * math.log(2.0 / 1.6)
     assert 1.05 * homogeneous < strain < 1.3 * homogeneous
+
+
+def test_richardson_needs_an_observed_order_of_one_half():
+    """Changes 1.37 then 1.10 (observed order 0.32, the strip at 9 degrees): the extrapolation would
+    lie 4.5 beyond the finest value, so no reference; changes 2.0 then 1.0 (order 1) give one."""
+    slow = (("0.4", 112.88), ("0.2", 111.51), ("0.1", 110.41))
+    rows = [_row("9", size, v, 1.0) for size, v in slow]
+    rows += [_row("6", size, v, 1.0) for size, v in (("0.4", 14.0), ("0.2", 12.0), ("0.1", 11.0))]
+    study.references(rows, ["drawing_stress"])
+    assert {r["reference"]["drawing_stress"]["kind"] for r in rows[:3]} == {"none"}
+    assert rows[3]["reference"]["drawing_stress"]["value"] == pytest.approx(10.0, rel=1e-12)
+    text = study.report(rows, ["drawing_stress"], [])
+    assert "nan" not in text and "| 9 | 0.1 | 110.41 | - | none |" in text

@@ -39,6 +39,9 @@ QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
 NUMERICAL_SECTIONS = ("discretisation", "solver", "penalty", "output")
 MESH_KEYS = ("discretisation.mesh_size", "discretisation.mesh_size_relative")  # absolute, relative
 ERROR_LEVELS = (0.10, 0.03, 0.01)
+# below this observed order the Richardson limit lies more than 2.4 times the last change beyond the
+# finest value: the three meshes are taken as not yet in the asymptotic range (no reference)
+LEAST_ORDER = 0.5
 
 
 def parse_vary(texts: list[str]) -> list[tuple[str, list[str]]]:
@@ -150,8 +153,9 @@ def _mesh_size(settings: dict[str, str]) -> float:
 
 def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     """Set every row's ``reference``: for each quantity its value, kind (exact, Richardson from the
-    three finest mesh sizes of the same other settings, or none) and relative error (in place; the
-    exact values are the rows' ``exact``)."""
+    three finest mesh sizes of the same other settings when their observed order is at least
+    LEAST_ORDER, or none) and relative error (in place; the exact values are the rows'
+    ``exact``)."""
     groups: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault(_settings_key(row["settings"], MESH_KEYS), []).append(row)
@@ -159,8 +163,9 @@ def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     for quantity, group in itertools.product(quantities, groups.values()):
         ranked = sorted((r for r in group if r["converged"] and math.isfinite(value(r, quantity))),
                         key=lambda r: -_mesh_size(r["settings"]))
-        values = [value(r, quantity) for r in ranked]
-        limit = richardson(values)[0] if len(values) >= 3 else math.nan
+        limit, order = richardson([value(r, quantity) for r in ranked]) if len(ranked) >= 3 \
+            else (math.nan, math.nan)
+        limit = limit if order >= LEAST_ORDER else math.nan
         for row in group:
             exact = row["exact"].get(quantity)
             if exact is not None:
@@ -358,7 +363,8 @@ def cheapest(rows: list[dict[str, Any]], quantities: list[str],
              levels: tuple[float, ...] = ERROR_LEVELS) -> list[dict[str, Any]]:
     """For each setting of the design keys and each error level, the converged run of least wall
     time whose relative error of every quantity with a reference is within it (None where no run
-    reaches the level). ``error`` is that run's largest relative error."""
+    reaches the level; one entry of level None for a design point without any reference).
+    ``error`` is that run's largest relative error."""
     measured = [q for q in quantities if has_reference(rows, q)]
     design = [k for k in rows[0]["settings"] if is_design_key(k)] if rows else []
     groups: dict[str, list[dict[str, Any]]] = {}
@@ -368,12 +374,16 @@ def cheapest(rows: list[dict[str, Any]], quantities: list[str],
     for point, group in groups.items():
         errors = [(max(relative_error(r, q) for q in measured), r)
                   for r in group if r.get("converged")]
+        design_point = dict(zip(design, json.loads(point), strict=True))
+        if not any(math.isfinite(e) for e, _ in errors):
+            found.append({"design": design_point, "level": None, "error": math.nan, "run": None})
+            continue
         for level in levels:
             within = [(e, r) for e, r in errors if math.isfinite(e) and e <= level]
             best = min(within, key=lambda item: item[1]["wall_time_s"]) if within \
                 else (math.nan, None)
-            found.append({"design": dict(zip(design, json.loads(point), strict=True)),
-                          "level": level, "error": best[0], "run": best[1]})
+            found.append({"design": design_point, "level": level, "error": best[0],
+                          "run": best[1]})
     return found
 
 
@@ -404,7 +414,9 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
         for q in quantities:
             line.append(f"{value(r, q):.5g}")
             if q in measured:
-                line += [f"{100 * relative_error(r, q):.2f}%", r["reference"][q]["kind"]]
+                error = relative_error(r, q)
+                line += [f"{100 * error:.2f}%", r["reference"][q]["kind"]] if math.isfinite(error) \
+                    else ["-", "none"]
         lines.append([*line, "yes" if r["converged"] else "no", f"{r['wall_time_s']:.2f}",
                       r["linear_solves"], r["dofs"]])
     parts = [markdown_table(None, header, lines)]
@@ -436,6 +448,9 @@ def _cheapest_table(rows: list[dict[str, Any]], quantities: list[str], keys: lis
     for entry in cheapest(rows, quantities):
         r = entry["run"]
         point = [str(entry["design"][k]) for k in design]
+        if entry["level"] is None:
+            lines.append([*point, "-", "no reference", "", "", "", ""])
+            continue
         level = f"{100 * entry['level']:g} %"
         if r is None:
             lines.append([*point, level, "none reaches it", "", "", "", ""])
