@@ -161,3 +161,17 @@ def test_richardson_needs_an_observed_order_of_one_half():
     assert rows[3]["reference"]["drawing_stress"]["value"] == pytest.approx(10.0, rel=1e-12)
     text = study.report(rows, ["drawing_stress"], [])
     assert "nan" not in text and "| 9 | 0.1 | 110.41 | - | none |" in text
+
+
+def test_a_parameter_that_is_not_a_number_is_plotted_by_name_without_optimum(shared_tmp):
+    rows = [{**_row("6", "0.1", v, 1.0), "settings": {"friction.law": law}}
+            for law, v in (("coulomb", 3.0), ("factor", 2.0), ("tresca", 2.5))]
+    study.references(rows, ["drawing_stress"])
+    optima = study.find_optima(rows, ["drawing_stress"], ["friction.law"])
+    assert [o["location"] for o in optima] == [None]
+    lines = study.series(rows, "drawing_stress", ["friction.law"])
+    assert lines == [("", [0.0, 1.0, 2.0], [3.0, 2.0, 2.5], "runs")]
+    if MPI.COMM_WORLD.rank == 0:
+        path = quantity_plots(shared_tmp, rows, ["drawing_stress"], ["friction.law"], optima,
+                              Units(), False)[0]
+        assert path.read_bytes()[:4] == b"\x89PNG"

@@ -302,11 +302,22 @@ def interior_minimum(xs: list[float], ys: list[float]
     return location, least, finite[i - 1:i + 2]
 
 
-def numeric(text: str) -> float | None:
+def positions(rows: list[dict[str, Any]], parameter: str) -> dict[str, float]:
+    """Where each value of ``parameter`` sits on the plot's axis: the number itself, or for values
+    that are not all numbers (e.g. friction.law) their index in the order of the grid."""
+    values = list(dict.fromkeys(row["settings"][parameter] for row in rows))
+    if all(numeric(v) for v in values):
+        return {v: float(v) for v in values}
+    return {v: float(i) for i, v in enumerate(values)}
+
+
+def numeric(text: str) -> bool:
+    """Whether a --vary value is a number."""
     try:
-        return float(text)
+        float(text)
     except ValueError:
-        return None
+        return False
+    return True
 
 
 def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
@@ -317,11 +328,12 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
     the mesh size (kind "reference: <kind>")."""
     parameter = next(k for k in keys if is_design_key(k))
     others = [k for k in keys if k != parameter]
+    where = positions(rows, parameter)
     lines = []
     for skip, kind in (((), "runs"), (MESH_KEYS, "reference")):
         grouped: dict[str, list[tuple[float, float, str]]] = {}
         for row in rows:
-            x = numeric(row["settings"][parameter])
+            x = where[row["settings"][parameter]]
             if kind == "runs":
                 y = value(row, quantity) if row["converged"] else math.nan
                 label_of = ""
@@ -329,7 +341,7 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
                 found = row["reference"].get(quantity, {})
                 y = math.nan if found.get("value") is None else found["value"]
                 label_of = found.get("kind", "none")
-            if x is None or not math.isfinite(y):
+            if not math.isfinite(y):
                 continue
             label = ", ".join(f"{k.split('.')[-1]} = {row['settings'][k]}"
                               for k in others if k not in skip)
@@ -346,12 +358,14 @@ def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
 def find_optima(rows: list[dict[str, Any]], quantities: list[str], keys: list[str]
                 ) -> list[dict[str, Any]]:
     """For every quantity and line of ``series``: the interior minimum (location, value and the
-    three points of the parabola; None each where there is none)."""
+    three points of the parabola; None each where there is none, and for a parameter whose values
+    are not numbers)."""
     parameter = next(k for k in keys if is_design_key(k))
+    numbers = all(numeric(row["settings"][parameter]) for row in rows)
     found = []
     for quantity in quantities:
         for label, xs, ys, kind in series(rows, quantity, keys):
-            minimum = interior_minimum(xs, ys)
+            minimum = interior_minimum(xs, ys) if numbers else None
             found.append({"quantity": quantity, "parameter": parameter, "others": label,
                           "line": kind, "location": minimum[0] if minimum else None,
                           "value": minimum[1] if minimum else None,

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .study import MESH_KEYS, is_design_key, relative_error, series
+from .study import MESH_KEYS, is_design_key, numeric, positions, relative_error, series
 from .units import Units
 
 NOT_LENGTHS = ("symmetry", "die", "mesh_file", "die_profile_file")
@@ -65,6 +65,9 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
                 ax.plot(optimum["location"], optimum["value"], "*", markersize=14,
                         color=drawn.get_color(), markeredgecolor="k",
                         label=f"optimum {optimum['location']:.4g}: {optimum['value']:.4g}")
+        where = positions(rows, parameter)
+        if not all(numeric(v) for v in where):  # categories: their names at their places
+            ax.set_xticks(list(where.values()), list(where))
         ax.set_xlabel(parameter_label(parameter, units))
         unit = units.label(units.dimension(quantity, axisymmetric))
         ax.set_ylabel(f"{quantity.replace('_', ' ')}{f' [{unit}]' if unit else ''}")
