@@ -96,7 +96,7 @@ def _gather_velocity_nodes(problem: FlowProblem):
     local = SUB_TRIANGLES[points.shape[1]]
     scale = max(np.ptp(points.reshape(-1, 2), axis=0).max(), 1e-300)
     keys = np.round(points.reshape(-1, 2) / scale * 1e9).astype(np.int64)
-    unique, first, index = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    _, first, index = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     triangles = (index.reshape(points.shape[:2])[:, local]).reshape(-1, 3)
     return points.reshape(-1, 2)[first], triangles, speeds.reshape(-1, 2)[first]
 
