@@ -165,8 +165,9 @@ def run_settings(scene) -> str:
     angle = getattr(g, "die_angle", None)
     die = f", die {angle:g} deg" if angle is not None else f", {g.die} die"
     friction = f"m = {f.m:g}" if f.law == "factor" else f"mu = {f.mu:g}"
+    mesh = f"mesh {Path(g.mesh_file).name}" if g.mesh_file else f"h = {d.mesh_size:.2g}{unit}"
     return (f"{scene.process.kind}, {shape} {g.entry_thickness:.4g} -> {g.exit_thickness:.4g}"
-            f"{unit}{die}, {friction}, {d.element} h = {d.mesh_size:.2g}{unit}")
+            f"{unit}{die}, {friction}, {d.element} {mesh}")
 
 
 def _finish(fig, ax, outlines: np.ndarray, path: Path, units: Units) -> Path:
