@@ -333,6 +333,10 @@ def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:
 
 
 NON_NEGATIVE_FIELDS = ("equivalent_strain_rate", "secant_viscosity")
+# the floor of a non-negative field relative to its largest value: far above the rounding (1e-15
+# relative) with which dolfinx's XDMF writer evaluates the nodal function at the nodes, so the file
+# holds no negative value, and far below anything a figure or ParaView shows
+FLOOR = 1e-12
 
 
 def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
@@ -341,8 +345,9 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     Scalars are nodal means (lumped projections) on Lagrange elements of the geometry degree, the
     form XDMF and ParaView read. Q2's basis functions change sign, so the nodal mean
     (f, phi_i)/(1, phi_i) of a non-negative f can be negative where f varies steeply (-4e-3 of the
-    equivalent strain rate was seen): the non-negative fields (NON_NEGATIVE_FIELDS) are clipped at
-    zero, max(value, 0), node by node (the projection is not positivity-preserving; the clip is).
+    equivalent strain rate was seen): the non-negative fields (NON_NEGATIVE_FIELDS) are clipped,
+    max(value, FLOOR max|value|), node by node (the projection is not positivity-preserving; the
+    clip is). Without the floor, the writer's rounding left -3e-12 of a largest 2e3 in the file.
     """
     space = function_space(problem.mesh, "P", geometry_degree(problem.mesh))
     sources = {
@@ -354,7 +359,8 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     for name, (expr, quadrature) in sources.items():
         target = LumpedProjector(expr, dolfinx.fem.Function(space, name=name), quadrature).project()
         if name in NON_NEGATIVE_FIELDS:
-            np.maximum(target.x.array, 0.0, out=target.x.array)
+            largest = problem.comm.allreduce(np.abs(target.x.array).max(initial=0.0), op=MPI.MAX)
+            np.maximum(target.x.array, FLOOR * largest, out=target.x.array)
         fields.append(target)
     return fields
 
