@@ -11,8 +11,8 @@ from forming_fenicsx.closed_forms import (
     avitzur_cone_factor, avitzur_drawing_stress, avitzur_optimum_angle,
     avitzur_optimum_angle_approx, central_burst_indicator, nadai_wedge_factor, radial_flow,
     radial_flow_strain, radial_flow_stress_rise, sachs_drawing_stress, shield_cone_factor,
-    swift_stress_rise, upper_bound_strip_drawing_stress, upper_bound_wedge_factor,
-    voce_stress_rise)
+    strip_optimum_angle, swift_stress_rise, upper_bound_strip_drawing_stress,
+    upper_bound_wedge_factor, voce_stress_rise)
 
 SQRT3 = math.sqrt(3.0)
 
@@ -253,3 +253,12 @@ def test_hardening_radial_flow_against_quadrature(symmetry):
         rise(lambda e: 300.0 - 200.0 * np.exp(-e / 0.2)), rel=1e-12)
     # the reference's Hollomon form from zero strain: K eps1^(n+1)/(n+1)
     assert swift_stress_rise(0.0, 0.4, 530.0, 0.26) == pytest.approx(530.0 * 0.4**1.26 / 1.26)
+
+
+def test_strip_optimum_angle_is_the_least_bound_on_a_fine_grid():
+    """The wedge-die bound's optimum (golden section) against the least of 0.01 deg steps."""
+    angles = np.arange(2.0, 20.0, 0.01)
+    least = angles[np.argmin([upper_bound_strip_drawing_stress(0.2, a, 0.1) for a in angles])]
+    assert strip_optimum_angle(0.2, 0.1) == pytest.approx(least, abs=0.01)
+    with_land = strip_optimum_angle(0.2, 0.1, 1.0)  # the land's friction does not move it
+    assert with_land == pytest.approx(strip_optimum_angle(0.2, 0.1), abs=1e-6)

@@ -63,12 +63,17 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
     run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
-    study = sub.add_parser("study", help="run a grid of variations of a scene; errors, costs, Pareto plot")
+    study = sub.add_parser("study", help="run a grid of variations of a scene: a design sweep "
+                           "(quantities against a parameter, optimum) or errors against costs")
     study.add_argument("scene", help="scene TOML file, or a study file (a [study] table: scene, vary, set, quantity)")
     study.add_argument("--vary", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
                        help="a key and its values (repeatable; the grid is every combination)")
     study.add_argument("--out", help="output folder (default: results/<scene name>_study)")
-    study.add_argument("--quantity", help="summary key to measure (default: ram_pressure or mean_die_pressure)")
+    study.add_argument("--quantity", action="append", default=[], metavar="KEY[,KEY...]",
+                       help="summary keys to measure (repeatable or comma-separated; default: "
+                       "ram_pressure or mean_die_pressure)")
+    study.add_argument("--keep-runs", action="store_true",
+                       help="keep each run's output folder (summary, fields, figures) in OUT/runs/")
     study.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
     study.add_argument("--quiet", action="store_true", help="log warnings only")
     sub.add_parser("bench", help="the nonlinear solvers side by side on both examples: solves, times, memory "
@@ -121,21 +126,25 @@ def main(argv: list[str] | None = None) -> int:
     comm = MPI.COMM_WORLD
     try:
         if args.command == "study":
-            from .study import load_study, run_study
+            from .study import load_study, parse_quantities, run_study
 
             configure_logging(args.quiet, comm.rank)
             logging.getLogger("forming_fenicsx.solvers").setLevel(logging.WARNING)  # one progress line per run
             study_file = _is_study(args.scene)
-            data, vary, quantity = load_study(args.scene, args.set) if study_file else \
-                (read_scene_data(args.scene, args.set), [], None)
+            data, vary, quantities = load_study(args.scene, args.set) if study_file else \
+                (read_scene_data(args.scene, args.set), [], [])
             if not vary + args.vary:
                 raise SceneError("--vary", "a study needs at least one --vary (or a study file)")
             stem = Path(args.scene).name.split(".")[0]
             out = Path(args.out) if args.out else Path("results") / (stem if study_file else f"{stem}_study")
-            rows = run_study(data, vary + args.vary, out, args.quantity or quantity, comm)
+            quantities = parse_quantities(args.quantity) or quantities
+            rows = run_study(data, vary + args.vary, out, quantities, comm,
+                             keep_runs=args.keep_runs)
             if comm.rank == 0:
                 print((out / "study.md").read_text())
-                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; {out}/study.csv, study.md")
+                figures = ", ".join(sorted(p.name for p in out.glob("*.png")))
+                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; "
+                      f"{out}/study.json, study.csv, study.md{', ' + figures if figures else ''}")
             return 0
         scene = load_scene(args.scene, args.set)
         petsc_options = petsc_options_from_args(petsc_args)

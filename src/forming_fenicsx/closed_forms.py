@@ -142,14 +142,11 @@ def upper_bound_strip_drawing_stress(reduction: float, semi_angle: float, m: flo
             + math.tan(alpha / 2) + 0.5 * m * land_over_exit_half_thickness)
 
 
-def avitzur_optimum_angle(reduction: float, m: float, land_over_exit_radius: float = 0.0) -> float:
-    """The semi-angle (degrees) minimising avitzur_drawing_stress: golden section on [0.5, 45]."""
-    lower, upper = 0.5, 45.0
+def optimum_angle(stress: Callable[[float], float], lower: float = 0.5,
+                  upper: float = 45.0) -> float:
+    """The semi-angle (degrees) minimising a unimodal ``stress(angle)``: golden section on
+    [lower, upper]."""
     golden = (math.sqrt(5) - 1) / 2
-
-    def stress(angle: float) -> float:
-        return avitzur_drawing_stress(reduction, angle, m, land_over_exit_radius)
-
     for _ in range(80):
         a, b = upper - golden * (upper - lower), lower + golden * (upper - lower)
         if stress(a) < stress(b):
@@ -157,6 +154,20 @@ def avitzur_optimum_angle(reduction: float, m: float, land_over_exit_radius: flo
         else:
             lower = a
     return 0.5 * (lower + upper)
+
+
+def avitzur_optimum_angle(reduction: float, m: float, land_over_exit_radius: float = 0.0) -> float:
+    """The semi-angle (degrees) minimising avitzur_drawing_stress."""
+    return optimum_angle(
+        lambda angle: avitzur_drawing_stress(reduction, angle, m, land_over_exit_radius))
+
+
+def strip_optimum_angle(reduction: float, m: float,
+                        land_over_exit_half_thickness: float = 0.0) -> float:
+    """The semi-angle (degrees) minimising upper_bound_strip_drawing_stress (Avitzur's method for a
+    wedge die)."""
+    return optimum_angle(lambda angle: upper_bound_strip_drawing_stress(
+        reduction, angle, m, land_over_exit_half_thickness))
 
 
 def avitzur_optimum_angle_approx(reduction: float, m: float) -> float:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import Any
 
@@ -14,19 +15,21 @@ from .solvers import IterationRecord
 from .units import Units
 
 
-def _json_safe(value: Any) -> Any:
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float (nested in dicts and lists) replaced by None: valid
+    JSON."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
+        return {k: json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     return value
 
 
 def write_summary(path: Path, summary: dict[str, Any]) -> None:
     """summary.json; non-finite numbers are written as null."""
-    path.write_text(json.dumps(_json_safe(summary), indent=2) + "\n")
+    path.write_text(json.dumps(json_safe(summary), indent=2) + "\n")
 
 
 def write_history(path: Path, history: list[IterationRecord]) -> None:
@@ -43,11 +46,39 @@ def write_history(path: Path, history: list[IterationRecord]) -> None:
 
 
 def write_fields(path: Path, mesh, fields) -> None:
-    """fields.xdmf: the mesh and each field once, under its fixed name (collective)."""
+    """fields.xdmf: one mesh carrying every field under its fixed name (collective).
+
+    dolfinx writes the .h5 datasets and an .xdmf with the mesh grid and a grid per function over
+    the same mesh (ParaView then draws the other grids, in solid grey, over the one coloured by a
+    field); rank 0 then rewrites the XML as one grid (single_grid_xdmf)."""
     with XDMFFile(mesh.comm, str(path), "w") as xdmf:
         xdmf.write_mesh(mesh)
         for field in fields:
             xdmf.write_function(field)
+    mesh.comm.barrier()
+    if mesh.comm.rank == 0:
+        single_grid_xdmf(path)
+    mesh.comm.barrier()
+
+
+def single_grid_xdmf(path: Path, name: str = "workpiece") -> None:
+    """Rewrite an .xdmf that dolfinx wrote (a mesh grid and a grid per function, dolfinx 0.5 to 0.9)
+    as one uniform Grid holding the mesh grid's Topology and Geometry and every function's
+    Attribute, each still pointing into the same .h5 datasets."""
+    tree = ElementTree.parse(path)
+    domain = tree.getroot().find("Domain")
+    grids = domain.findall("Grid")
+    mesh_grid = next(g for g in grids
+                     if g.find("Topology") is not None and g.find("Geometry") is not None)
+    grid = ElementTree.Element("Grid", Name=name, GridType="Uniform")
+    grid.extend([mesh_grid.find("Topology"), mesh_grid.find("Geometry"),
+                 *(a for g in grids if g is not mesh_grid for a in g.iter("Attribute"))])
+    for old in grids:
+        domain.remove(old)
+    domain.append(grid)
+    ElementTree.indent(tree, "  ")
+    body = ElementTree.tostring(tree.getroot(), encoding="unicode")
+    path.write_text(f'<?xml version="1.0"?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n{body}\n')
 
 
 def write_die_profile(path: Path, profile: dict, units: Units) -> None:

@@ -309,6 +309,17 @@ def exit_zone_rate_ratio(problem: FlowProblem) -> float:
     return zone_mean / mean if mean > 0 else math.nan
 
 
+def mean_exit_strain(problem: FlowProblem) -> float:
+    """The flux-weighted mean equivalent strain of the product: with u.grad(eps) = rate along the
+    streamlines and div u = 0, div(eps u) = rate, so int_exit eps u.n = int rate dx over the
+    workpiece (eps = 0 entering, no flow through the die and free surfaces) and the mean is
+    int rate dx / Q, Q the throughput. Compare the homogeneous strain ln(A0/A1) (round) or
+    (2/sqrt3) ln(h0/h1) (strip): the excess is the redundant strain."""
+    through = throughput(problem)
+    return _integrate(problem, problem.equivalent_strain_rate(problem.u) * problem.dx) / through \
+        if through else math.nan
+
+
 def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:
     """For the law (4.5): the fractions of the plastic work rate int sigma_p(rate) rate dissipated at rates
     above rate2 and below rate1, where the law is linear (viscous) instead of nearly rate-independent."""
@@ -392,8 +403,29 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "die_penetration": die_penetration(problem),
         "die_contact_fraction": die_contact_fraction(problem),
         "exit_zone_rate_ratio": exit_zone_rate_ratio(problem),
+        # a hardening law's is the transported strain's (hardening_scalars)
+        **({} if problem.strain is not None else {"mean_exit_strain": mean_exit_strain(problem)}),
         **dissipation_outside_window(problem),
     }
+
+
+def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:
+    """The velocity on Lagrange elements of the geometry degree (interpolated when the element
+    differs): the form XDMF, ParaView and the flow lines read."""
+    degree = geometry_degree(problem.mesh)
+    if problem.scene.discretisation.degree == degree:
+        return problem.u
+    space = function_space(problem.mesh, "P", degree, (2,))
+    velocity = dolfinx.fem.Function(space, name="velocity")
+    velocity.interpolate(problem.u)
+    return velocity
+
+
+NON_NEGATIVE_FIELDS = ("equivalent_strain_rate", "secant_viscosity", "equivalent_strain", "flow_stress")
+# the floor of a non-negative field relative to its largest value: far above the rounding (1e-15
+# relative) with which dolfinx's XDMF writer evaluates the nodal function at the nodes, so the file
+# holds no negative value, and far below anything a figure or ParaView shows
+FLOOR = 1e-12
 
 
 def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
@@ -401,14 +433,13 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     (and, with a hardening law, the equivalent strain and the flow stress).
 
     Scalars are nodal means (lumped projections) on Lagrange elements of the geometry degree, the
-    form XDMF and ParaView read.
+    form XDMF and ParaView read. Q2's basis functions change sign, so the nodal mean
+    (f, phi_i)/(1, phi_i) of a non-negative f can be negative where f varies steeply (-4e-3 of the
+    equivalent strain rate was seen): the non-negative fields (NON_NEGATIVE_FIELDS) are clipped,
+    max(value, FLOOR max|value|), node by node (the projection is not positivity-preserving; the
+    clip is). Without the floor, the writer's rounding left -3e-12 of a largest 2e3 in the file.
     """
-    degree = geometry_degree(problem.mesh)
-    space = function_space(problem.mesh, "P", degree)
-    velocity = problem.u
-    if problem.scene.discretisation.degree != degree:
-        velocity = dolfinx.fem.Function(function_space(problem.mesh, "P", degree, (2,)), name="velocity")
-        velocity.interpolate(problem.u)
+    space = function_space(problem.mesh, "P", geometry_degree(problem.mesh))
     sources = {
         "equivalent_strain_rate": (problem.equivalent_strain_rate(problem.u), problem.full_degree),
         "hydrostatic_pressure": (problem.hydrostatic_stress(), problem.volumetric_degree),
@@ -417,12 +448,15 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
     if problem.strain is not None:  # a hardening law: its strain and flow stress
         sources["equivalent_strain"] = (problem.strain, problem.full_degree)
         sources["flow_stress"] = (problem.flow_stress(problem.u), problem.full_degree)
-    fields = [velocity]
+    fields = [nodal_velocity(problem)]
     if problem.temperature_field is not None:  # [thermal]: the temperature, as solved
         fields.append(problem.temperature_field.T)
     for name, (expr, quadrature) in sources.items():
-        target = dolfinx.fem.Function(space, name=name)
-        fields.append(LumpedProjector(expr, target, quadrature).project())
+        target = LumpedProjector(expr, dolfinx.fem.Function(space, name=name), quadrature).project()
+        if name in NON_NEGATIVE_FIELDS:
+            largest = problem.comm.allreduce(np.abs(target.x.array).max(initial=0.0), op=MPI.MAX)
+            np.maximum(target.x.array, FLOOR * largest, out=target.x.array)
+        fields.append(target)
     return fields
 
 

@@ -161,7 +161,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:
-            write_die_plot(profile, out / "die.png", title or scene.process.kind, scene.units)
+            write_die_plot(profile, out / "die.png", title or scene.process.kind, scene)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"

@@ -16,6 +16,7 @@ the fix. Thresholds (docs/sanity.md gives the values measured on correct and bro
 | plastic work at rates above rate2 of (4.5) | 10 % | |
 | plastic work at rates below rate1 of (4.5) | 50 % | |
 | estimated linear-solve error / solver.tolerance | 1 % | |
+| force_balance_residual (x forces of the driving face, the die and Gamma5) | 1 % | 5 % |
 """
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ EXIT_ZONE_RIGID = 0.1
 FREE_SURFACE = (0.05, 0.2)
 ABOVE_RATE2 = 0.1
 BELOW_RATE1 = 0.5
+FORCE_BALANCE = (0.01, 0.05)
 
 
 @dataclass(frozen=True)
@@ -153,10 +155,22 @@ def solve_accuracy(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "(penalty.d_relative, penalty.d_N_relative, friction.d_T_relative)")
 
 
+def force_balance(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """The x forces on the workpiece must balance (verification.md): a driving force that differs
+    from the die's by percents is not the force of this flow, whatever the increment says."""
+    value = summary["force_balance_residual"]
+    return _graded("force_balance", value, FORCE_BALANCE,
+                   f"the x forces do not balance: |driving + applied - die| is {100 * value:.3g} % of "
+                   "the driving force, so the reported forces and stresses are not those of one flow. "
+                   "Set solver.force_tolerance (e.g. 1e-3) so the iteration goes on until they balance, "
+                   "or try solver.method = \"direct\"")
+
+
 def check_run(summary: dict[str, Any], scene: Scene) -> list[Finding]:
     """Every check, a cause before its symptoms."""
     found = [f for f in (die_penetration(summary, scene), die_contact(summary, scene)) if f is not None]
     found += [f for f in (compressibility(summary, scene, found),) if f is not None]
     found += drawability(summary, scene)
-    found += [f for f in (free_surfaces(summary, scene), solve_accuracy(summary, scene)) if f is not None]
+    found += [f for f in (free_surfaces(summary, scene), solve_accuracy(summary, scene),
+                          force_balance(summary, scene)) if f is not None]
     return found + rate_window(summary, scene)

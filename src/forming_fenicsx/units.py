@@ -93,16 +93,20 @@ class Units:
         """A CSV header: ``name [unit]`` for a quantity of DIMENSIONS when its unit is known, else ``name``."""
         return self.labelled(name, DIMENSIONS.get(name, ""))
 
+    @staticmethod
+    def dimension(key: str, axisymmetric: bool = False) -> str:
+        """The dimension of a reported quantity ("" when unknown); the forces of an axisymmetric
+        model are the whole body's, not per unit width."""
+        found = DIMENSIONS.get(key, "")
+        return "force" if axisymmetric and found == "force_per_width" else found
+
     def summary(self, keys: list[str], axisymmetric: bool = False) -> dict[str, object]:
         """What summary.json says of the units: the labels, and the unit of each reported quantity
         (forces of an axisymmetric model are the whole body's, not per unit width)."""
         if not self.given:
             return {"system": "not given: any consistent system ([units] names it; README, 'Units')"}
 
-        def dimension(key: str) -> str:
-            found = DIMENSIONS[key]
-            return "force" if axisymmetric and found == "force_per_width" else found
-
-        quantities = {key: self.label(dimension(key)) for key in keys if key in DIMENSIONS}
+        quantities = {key: self.label(self.dimension(key, axisymmetric))
+                      for key in keys if key in DIMENSIONS}
         return {"length": self.length, "time": self.time, "stress": self.stress, "force": self.force,
                 "quantities": {key: unit for key, unit in quantities.items() if unit}}
