@@ -251,6 +251,26 @@ def test_supg_overshoots_less_than_upwind():
         assert (supg < upwind).all(), (degree, supg, upwind)
 
 
+def test_velocity_changed_on_one_rank():
+    """A velocity changed on the last rank's dofs only is a new velocity on every rank (the
+    cached solve is collective): eps is that of a fresh field, to 1e-12."""
+    case = extension_case("plane_strain", 4, 1)
+    field = transport(case, 1, "supg")
+    field.solve(case.u)
+    comm = case.mesh.comm
+    index_map = case.u.function_space.dofmap.index_map
+    ghosted = np.concatenate(comm.allgather(index_map.ghosts))  # global node numbers
+    if comm.rank == comm.size - 1:  # a node no other rank holds
+        start = index_map.local_range[0]
+        node = next(i for i in range(index_map.size_local) if start + i not in ghosted)
+        case.u.x.array[2 * node] *= 1.1
+    fresh = transport(case, 1, "supg")
+    difference = field.solve(case.u).x.array - fresh.solve(case.u).x.array
+    assert comm.allreduce(np.abs(difference).max(), op=MPI.MAX) < 1e-12
+    field.destroy()
+    fresh.destroy()
+
+
 # -- the tables of docs/strain_transport.md ----------------------------------------------------
 def report() -> None:
     """Print errors and orders on four meshes, overshoots at ten step positions and the cost."""

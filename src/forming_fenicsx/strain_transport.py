@@ -98,10 +98,14 @@ class StrainField:
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
         """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
-        everywhere (before the first solve) carries no strain: eps stays as it is."""
-        if self._solved_for is not None and np.array_equal(self._solved_for, u.x.array):
+        everywhere (before the first solve) carries no strain: eps stays as it is. The solve for
+        the last velocity is kept: the same u (on every rank: the decision is collective, a
+        velocity changed on one rank only is solved on all) returns it without solving."""
+        comm = self.space.mesh.comm
+        same = self._solved_for is not None and np.array_equal(self._solved_for, u.x.array)
+        if comm.allreduce(same, op=MPI.LAND):
             return self._candidate
-        if self.space.mesh.comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
+        if comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
             self._candidate.x.array[:] = self.eps.x.array
             return self._candidate
         self.velocity.x.array[:] = u.x.array
