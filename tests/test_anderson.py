@@ -1,8 +1,8 @@
-"""Anderson acceleration (anderson.py) of linear fixed-point maps x = A x + b, A = Q diag(lambda) Q^T
-with a fixed random orthogonal Q, on 12 unknowns split across the ranks: each rank owns a block
-(the ``owned`` argument) and holds one ghost entry after it, as a dolfinx vector does. A
-contraction converges in fewer steps than the plain iteration; a map with an eigenvalue below -1,
-on which the plain iteration diverges, converges; the iterates are those of one rank.
+"""Anderson acceleration (anderson.py) of linear fixed-point maps x = A x + b, A = Q diag(lambda)
+Q^T with a fixed random orthogonal Q, on 12 unknowns split across the ranks: each rank owns a block
+(the ``owned`` argument) and holds one ghost entry after it, as a dolfinx vector does. A contraction
+converges in fewer steps than the plain iteration; a map with an eigenvalue below -1, on which the
+plain iteration diverges, converges; the iterates are those of one rank.
 """
 from __future__ import annotations
 
@@ -47,7 +47,8 @@ def iterate(eigenvalues: np.ndarray, depth: int, steps: int, comm: MPI.Comm = MP
 def errors(eigenvalues: np.ndarray, depth: int, steps: int) -> np.ndarray:
     """||x_k - x*|| / ||x*|| for k = 0 ... steps."""
     exact = linear_map(eigenvalues)[2]
-    return np.linalg.norm(iterate(eigenvalues, depth, steps) - exact, axis=1) / np.linalg.norm(exact)
+    difference = iterate(eigenvalues, depth, steps) - exact
+    return np.linalg.norm(difference, axis=1) / np.linalg.norm(exact)
 
 
 def steps_to(values: np.ndarray, tolerance: float) -> int:
