@@ -23,8 +23,8 @@ inflow strain the largest over- or undershoot is, of the jump, 11 to 22 % (Q1) a
 for SUPG, 35 to 39 % (Q1) and 28 to 38 % (Q2) for upwind DG, which is exact only when the step lies
 on a mesh line and the flow along the mesh lines; the values do not fall with refinement (the step
 as the quadrature points of the inflow side see it, projected on the element). Upwind DG has 3.9
-(Q1) and 2.2 (Q2) times the unknowns and solves in 2 to 3 times the time. Hence SUPG, the default.
-One linear solve (MUMPS LU, option prefix ``strain_``) per velocity.
+(Q1) and 2.2 (Q2) times the unknowns and took 2.3 to 2.9 times as long (1 rank). Hence SUPG, the
+default. One linear solve (MUMPS LU, option prefix ``strain_``) per velocity.
 """
 from __future__ import annotations
 
