@@ -112,7 +112,8 @@ class StrainField:
         """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
         everywhere (before the first solve) carries no strain: eps stays as it is. The solve for
         the last velocity is kept: the same u (on every rank: the decision is collective, a
-        velocity changed on one rank only is solved on all) returns it without solving."""
+        velocity changed on one rank only is solved on all) returns it without solving, even if
+        a Constant in the inflow strain has changed since."""
         comm = self.space.mesh.comm
         same = self._solved_for is not None and np.array_equal(self._solved_for, u.x.array)
         if comm.allreduce(same, op=MPI.LAND):
