@@ -49,7 +49,8 @@ class AndersonMixing:
         gram = self.comm.allreduce(dF.T @ dF)
         rhs = self.comm.allreduce(dF.T @ f)
         # the least-squares problem through its normal equations, truncated where the differences
-        # are nearly dependent (singular values below 1e-10 of the largest)
+        # are nearly dependent (singular values of the Gram matrix below 1e-10 of the largest,
+        # those of the differences below 1e-5)
         gamma = np.linalg.lstsq(gram, rhs, rcond=1e-10)[0]
         result[:self.owned] -= (np.column_stack(self._dX) + self.damping * dF) @ gamma
         return result

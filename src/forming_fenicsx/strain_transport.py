@@ -1,5 +1,5 @@
-"""The equivalent strain of steady flow: u . grad(eps) = rate in the workpiece, eps = eps_in where the
-material flows in (reference section 3).
+"""The equivalent strain of steady flow: u . grad(eps) = rate in the workpiece, eps = eps_in where
+the material flows in (reference section 3).
 
 Pure advection: an unstabilised Galerkin scheme oscillates. Two stable schemes, W the measure
 weight (2 pi y when axisymmetric), (u.n)^- = max(-u.n, 0), degree p (the velocity's):
@@ -11,10 +11,20 @@ weight (2 pi y when axisymmetric), (u.n)^- = max(-u.n, 0), degree p (the velocit
   upwind value is penalised where the flow enters a cell).
 Both impose the inflow condition weakly where the velocity enters (at more than 30 degrees to the
 boundary: not on die walls and free surfaces, which it follows), on any boundary shape, and
-are consistent (the exact eps satisfies them). docs/strain_transport.md compares them: both reach
-the order p + 1 on smooth strains; at a jump of the inflow strain SUPG over- and undershoots by
-13 % (Q1) and 7 % (Q2) of the jump, upwind DG by ... One linear solve (MUMPS LU, option prefix
-``strain_``) per velocity.
+are consistent (the exact eps satisfies them). A side the flow enters at less than 30 degrees gets
+no condition: there the error stalls (0.4 to 0.6 % on 32 cells at 20 degrees, orders below
+0.5, against p + 1 at 40 degrees).
+
+docs/strain_transport.md compares them on velocities with exact strain
+(tests/test_strain_transport.py). Both reach the order p + 1 when the strain rate is accurate (Q1:
+1.98 to 2.11, Q2: 2.90 to 3.20) and order 2 for Q1 and Q2 alike with the velocity in Q_p, as the
+flow gives it (its strain rate is O(h^p); the two schemes then agree within 5 %). At a step of the
+inflow strain the largest over- or undershoot is, of the jump, 11 to 22 % (Q1) and 15 to 19 % (Q2)
+for SUPG, 35 to 39 % (Q1) and 28 to 38 % (Q2) for upwind DG, which is exact only when the step lies
+on a mesh line and the flow along the mesh lines; the values do not fall with refinement (the step
+as the quadrature points of the inflow side see it, projected on the element). Upwind DG has 3.9
+(Q1) and 2.2 (Q2) times the unknowns and took 2.3 to 2.9 times as long (1 rank). Hence SUPG, the
+default. One linear solve (MUMPS LU, option prefix ``strain_``) per velocity.
 """
 from __future__ import annotations
 
@@ -43,7 +53,8 @@ class StrainField:
 
     def __init__(self, u: dolfinx.fem.Function, coordinates: CoordinateSystem, inflow_strain,
                  degree: int, quadrature_degree: int, scheme: str = "supg",
-                 options: dict | None = None, anderson_depth: int = 4, anderson_damping: float = 1.0):
+                 options: dict | None = None, anderson_depth: int = 4,
+                 anderson_damping: float = 1.0):
         mesh = u.function_space.mesh
         self.space = function_space(mesh, "P" if scheme == "supg" else "DP", degree)
         self.eps = dolfinx.fem.Function(self.space, name="equivalent_strain")
@@ -53,8 +64,9 @@ class StrainField:
         self.solves = 0
         v = self.velocity
         eps, w = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
-        dx = coordinates.measure(ufl.dx(domain=mesh, metadata={"quadrature_degree": quadrature_degree}))
-        ds = coordinates.measure(ufl.ds(domain=mesh, metadata={"quadrature_degree": quadrature_degree}))
+        metadata = {"quadrature_degree": quadrature_degree}
+        dx = coordinates.measure(ufl.dx(domain=mesh, metadata=metadata))
+        ds = coordinates.measure(ufl.ds(domain=mesh, metadata=metadata))
         normal = ufl.FacetNormal(mesh)
         # the inflow faces: where the velocity enters at more than 30 degrees to the boundary; a
         # die wall or free surface, that the flow follows, has no condition (a characteristic
@@ -63,14 +75,14 @@ class StrainField:
         inflow = ufl.conditional(ufl.gt(entering, 0.5 * ufl.sqrt(ufl.dot(v, v))), entering, 0.0)
         rate = coordinates.equivalent_strain_rate(v)
         if scheme == "supg":
-            h = ufl.sqrt(abs(ufl.JacobianDeterminant(mesh)))  # the cell size (CellDiameter: Q1 only)
+            # the cell size (CellDiameter: Q1 only)
+            h = ufl.sqrt(abs(ufl.JacobianDeterminant(mesh)))
             speed = ufl.sqrt(ufl.dot(v, v)) + 1e-300
             test = w + h / (2 * degree * speed) * ufl.dot(v, ufl.grad(w))
             jumps = 0
         elif scheme == "upwind":
             test = w
-            dS = coordinates.measure(ufl.dS(domain=mesh, metadata={"quadrature_degree":
-                                                                   quadrature_degree}))
+            dS = coordinates.measure(ufl.dS(domain=mesh, metadata=metadata))
             entering = {side: ufl.max_value(-ufl.dot(v(side), normal(side)), 0.0)
                         for side in ("+", "-")}
             jumps = (entering["+"] * (eps("+") - eps("-")) * w("+")
@@ -98,10 +110,15 @@ class StrainField:
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
         """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
-        everywhere (before the first solve) carries no strain: eps stays as it is."""
-        if self._solved_for is not None and np.array_equal(self._solved_for, u.x.array):
+        everywhere (before the first solve) carries no strain: eps stays as it is. The solve for
+        the last velocity is kept: the same u (on every rank: the decision is collective, a
+        velocity changed on one rank only is solved on all) returns it without solving, even if
+        a Constant in the inflow strain has changed since."""
+        comm = self.space.mesh.comm
+        same = self._solved_for is not None and np.array_equal(self._solved_for, u.x.array)
+        if comm.allreduce(same, op=MPI.LAND):
             return self._candidate
-        if self.space.mesh.comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
+        if comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
             self._candidate.x.array[:] = self.eps.x.array
             return self._candidate
         self.velocity.x.array[:] = u.x.array
