@@ -18,6 +18,8 @@ def function_space(mesh, family: str, degree: int, shape: tuple[int, ...] = ()):
     """A Lagrange ("P") or discontinuous Lagrange ("DP") space, scalar or vector valued."""
     if LEGACY:
         legacy_family = {"P": "CG", "DP": "DG"}[family]
+        if family == "DP" and mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral:
+            legacy_family = "DQ"  # what UFL 2022 makes of "DG" on quadrilaterals, with a warning
         if shape:
             return dolfinx.fem.VectorFunctionSpace(mesh, (legacy_family, degree), dim=shape[0])
         return dolfinx.fem.FunctionSpace(mesh, (legacy_family, degree))

@@ -148,7 +148,7 @@ class _Strip:
             setattr(self, key, value)
         for key in self.DIE_KEYS:
             if getattr(self, key) is not None:
-                raise SceneError(f"geometry.{key}", f"does not apply with geometry.mesh_file (the die is the "
+                raise SceneError(f"geometry.{key}", "does not apply with geometry.mesh_file (the die is the "
                                  "mesh's gamma3_contact); leave it out")
 
     def check_die(self) -> None:

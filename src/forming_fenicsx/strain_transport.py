@@ -33,12 +33,11 @@ import dolfinx.fem.petsc
 import numpy as np
 import ufl
 from mpi4py import MPI
-from petsc4py import PETSc
 
-from .compat import function_space, petsc_vec
+from .compat import function_space
 from .anderson import AndersonMixing
 from .coordinates import CoordinateSystem
-from .petsc_options import PrefixedOptions
+from .linear_system import LinearSystem, unchanged
 
 PREFIX = "strain"
 
@@ -89,21 +88,13 @@ class StrainField:
                      + entering["-"] * (eps("-") - eps("+")) * w("-")) * dS
         else:
             raise ValueError(f"scheme must be supg or upwind; got {scheme!r}")
-        self._a = dolfinx.fem.form(ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds
-                                   + jumps)
-        self._L = dolfinx.fem.form(rate * test * dx + inflow * inflow_strain * w * ds)
+        self._system = LinearSystem(
+            dolfinx.fem.form(ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps),
+            dolfinx.fem.form(rate * test * dx + inflow * inflow_strain * w * ds), mesh.comm, PREFIX,
+            options=options)
         self._norm = dolfinx.fem.form(self._candidate ** 2 * dx)
         self._difference = dolfinx.fem.form((self._candidate - self.eps) ** 2 * dx)
-        self._matrix = dolfinx.fem.petsc.create_matrix(self._a)
-        self._rhs = dolfinx.fem.petsc.create_vector(self._L)
-        self._ksp = PETSc.KSP().create(mesh.comm)
-        self._ksp.setOperators(self._matrix)
-        defaults = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-        prefixed = PrefixedOptions(PREFIX, {**defaults, **(options or {})})
-        self._ksp.setOptionsPrefix(prefixed.prefix)
-        self._ksp.setFromOptions()
-        prefixed.release()
-        self._solved_for: np.ndarray | None = None
+        self._solved_for: tuple[np.ndarray] | None = None
         self._mixing = AndersonMixing(mesh.comm, self.space.dofmap.index_map.size_local
                                       * self.space.dofmap.index_map_bs, anderson_depth,
                                       anderson_damping)
@@ -115,25 +106,16 @@ class StrainField:
         velocity changed on one rank only is solved on all) returns it without solving, even if
         a Constant in the inflow strain has changed since."""
         comm = self.space.mesh.comm
-        same = self._solved_for is not None and np.array_equal(self._solved_for, u.x.array)
-        if comm.allreduce(same, op=MPI.LAND):
+        if unchanged(comm, self._solved_for, u.x.array):
             return self._candidate
         if comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
             self._candidate.x.array[:] = self.eps.x.array
             return self._candidate
         self.velocity.x.array[:] = u.x.array
         self.velocity.x.scatter_forward()
-        self._matrix.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(self._matrix, self._a)
-        self._matrix.assemble()
-        with self._rhs.localForm() as local:
-            local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(self._rhs, self._L)
-        self._rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self._ksp.solve(self._rhs, petsc_vec(self._candidate))
-        self._candidate.x.scatter_forward()
+        self._system.solve(self._candidate, "strain")
         self.solves += 1
-        self._solved_for = u.x.array.copy()
+        self._solved_for = (u.x.array.copy(),)
         return self._candidate
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
@@ -149,5 +131,4 @@ class StrainField:
         return float(np.sqrt(difference / norm)) if norm > 0 else 0.0
 
     def destroy(self) -> None:
-        for item in (self._ksp, self._matrix, self._rhs):
-            item.destroy()
+        self._system.destroy()

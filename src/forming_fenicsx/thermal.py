@@ -50,9 +50,9 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .compat import function_space, petsc_vec
+from .compat import function_space
 from .coordinates import CoordinateSystem
-from .petsc_options import PrefixedOptions
+from .linear_system import LinearSystem, unchanged
 from .roles import ROLES
 
 PREFIX = "thermal"
@@ -196,45 +196,23 @@ class TemperatureField:
             PETSc.ScalarType(value), dolfinx.fem.locate_dofs_topological(
                 self.space, fdim, facet_tags.indices[facet_tags.values == tag]), self.space)
             for tag, value in (fixed or {}).items()]
-        self._a, self._L = dolfinx.fem.form(a), dolfinx.fem.form(L)
+        self._system = LinearSystem(dolfinx.fem.form(a), dolfinx.fem.form(L), mesh.comm, PREFIX,
+                                    self.bcs, options)
         self._norm = dolfinx.fem.form(self._candidate ** 2 * self.dx)
         self._difference = dolfinx.fem.form((self._candidate - self.T) ** 2 * self.dx)
-        self._matrix = dolfinx.fem.petsc.create_matrix(self._a)
-        self._rhs = dolfinx.fem.petsc.create_vector(self._L)
-        self._ksp = PETSc.KSP().create(mesh.comm)
-        self._ksp.setOperators(self._matrix)
-        defaults = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-        prefixed = PrefixedOptions(PREFIX, {**defaults, **(options or {})})
-        self._ksp.setOptionsPrefix(prefixed.prefix)
-        self._ksp.setFromOptions()
-        prefixed.release()
         self._solved_for: tuple[np.ndarray, np.ndarray] | None = None
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
         """T of the velocity u with the source at the frozen T (into ``_candidate``; collective); a
         velocity that is zero everywhere (before the first flow solve) leaves T as it is."""
-        if self._solved_for is not None and np.array_equal(self._solved_for[0], u.x.array) \
-                and np.array_equal(self._solved_for[1], self.T.x.array):
+        if unchanged(self.mesh.comm, self._solved_for, u.x.array, self.T.x.array):
             return self._candidate
         if self.mesh.comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
             self._candidate.x.array[:] = self.T.x.array
             return self._candidate
         self.velocity.x.array[:] = u.x.array
         self.velocity.x.scatter_forward()
-        self._matrix.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(self._matrix, self._a, bcs=self.bcs)
-        self._matrix.assemble()
-        with self._rhs.localForm() as local:
-            local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(self._rhs, self._L)
-        dolfinx.fem.petsc.apply_lifting(self._rhs, [self._a], bcs=[self.bcs])
-        self._rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        dolfinx.fem.petsc.set_bc(self._rhs, self.bcs)
-        self._ksp.solve(self._rhs, petsc_vec(self._candidate))
-        if self._ksp.getConvergedReason() < 0:
-            raise RuntimeError("the temperature solve failed: KSP reason "
-                               f"{self._ksp.getConvergedReason()}")
-        self._candidate.x.scatter_forward()
+        self._system.solve(self._candidate, "temperature")
         self.solves += 1
         self._solved_for = (u.x.array.copy(), self.T.x.array.copy())
         return self._candidate
@@ -305,8 +283,7 @@ class TemperatureField:
         return terms
 
     def destroy(self) -> None:
-        for item in (self._ksp, self._matrix, self._rhs):
-            item.destroy()
+        self._system.destroy()
 
 
 def container_tags(problem):
