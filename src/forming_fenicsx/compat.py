@@ -117,9 +117,8 @@ def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
         tree = geometry.bb_tree(mesh, tdim)
         candidates = geometry.compute_collisions_points(tree, points)
     colliding = geometry.compute_colliding_cells(mesh, candidates, points)
+    offsets = np.asarray(colliding.offsets)
     cells = np.full(len(points), -1, dtype=np.int32)
-    for i in range(len(points)):
-        links = colliding.links(i)
-        if len(links):
-            cells[i] = links[0]
+    hit = offsets[1:] > offsets[:-1]
+    cells[hit] = np.asarray(colliding.array)[offsets[:-1][hit]]  # the first colliding cell of each
     return cells
