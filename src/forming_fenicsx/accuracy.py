@@ -157,12 +157,14 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
     size, previous, found, error = first_mesh_size(scene), None, None, math.inf
     while True:
         problem, result, summary = solve(level_scene(scene, size), previous)
+        if sizes:  # the run says where it started
+            summary["restarted_from"] = f"the velocity on mesh size {sizes[-1]:.6g}, interpolated"
         previous = problem.u
         sizes.append(size)
         values.append(float(summary[quantity]))
         levels.append({"mesh_size": size, "dofs": summary["dofs"], "linear_solves": summary["linear_solves"],
                        "wall_time_s": summary["wall_time_s"], quantity: summary[quantity],
-                       "converged": summary["converged"]})
+                       "converged": summary["converged"], "started_from": summary["restarted_from"]})
         if len(values) >= 3:
             found = estimate(sizes, values, scene.discretisation.degree)
             error = float(relative(found, values[-1]))
