@@ -127,13 +127,17 @@ def test_accuracy_flag_and_keys_are_checked():
     assert make_scene(accuracy={"target": 0.01}).accuracy.quantity == "ram_pressure"
 
 
+COARSE_NEWTON = ["--quiet", "--set", "discretisation.mesh_size=0.5", "--set", "solver.method=newton",
+                 "--set", "discretisation.averaging=quadrature", "--set", "output.fields=false",
+                 "--set", "output.figures=false"]
+
+
 def test_forming_run_accuracy_reaches_the_target_with_an_honest_estimate(shared_tmp):
     """Example 1 (Newton, Q2 reduced) from a coarse scene: the estimate of the finest ram pressure's
-    error lies within a factor 1.5 of its true error against Hill's (1 + pi/2) k."""
+    error lies within a factor 1.5 of its true error against Hill's (1 + pi/2) k (measured: 4.21 %
+    against 3.17 %, docs/accuracy.md)."""
     out = shared_tmp / "accuracy"
-    assert main(["run", DEMO, "--out", str(out), "--accuracy", "5%", "--quiet", "--set", "discretisation.mesh_size=0.5",
-                 "--set", "solver.method=newton", "--set", "discretisation.averaging=quadrature",
-                 "--set", "output.fields=false", "--set", "output.figures=false"]) == 0
+    assert main(["run", DEMO, "--out", str(out), "--accuracy", "5%", *COARSE_NEWTON]) == 0
     MPI.COMM_WORLD.barrier()
     summary = json.loads((out / "summary.json").read_text())
     accuracy = summary["accuracy"]
@@ -143,3 +147,18 @@ def test_forming_run_accuracy_reaches_the_target_with_an_honest_estimate(shared_
     assert accuracy["value"] == summary["ram_pressure"]
     true = abs(accuracy["value"] / (1 + math.pi / 2) - 1)
     assert 1 / 1.5 < accuracy["estimate"] / true < 1.5
+
+
+def test_a_target_not_reached_exits_3_with_the_best_value_and_its_estimate(shared_tmp, capsys):
+    out = shared_tmp / "not_reached"
+    assert main(["run", DEMO, "--out", str(out), "--accuracy", "0.5%", "--set", "accuracy.max_levels=3",
+                 *COARSE_NEWTON]) == 3
+    MPI.COMM_WORLD.barrier()
+    if MPI.COMM_WORLD.rank == 0:
+        assert "accuracy not reached" in capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    accuracy = summary["accuracy"]
+    assert summary["converged"] is True and accuracy["reached"] is False
+    assert "max_levels = 3" in accuracy["reason"] and len(accuracy["meshes"]) == 3
+    assert accuracy["estimate"] > 0.005 and accuracy["value"] == summary["ram_pressure"]
+    assert accuracy["meshes"][2]["started_from"] == "the velocity on mesh size 1, interpolated"
