@@ -3,11 +3,12 @@
 For each case: the --accuracy sequence (accuracy.solve_to_accuracy with run.solve_scene, as `forming
 run --accuracy` runs it), then one run from the uniform-modulus start on its final mesh; each twice,
 alternating, and the smaller wall time kept (the machine is shared: the processor seconds of both,
-summed over the ranks, give a second ratio that other users' processes do not inflate). Printed: the estimate against the
-true error where an exact value is known, the wall times and their ratio, and the solves per level with
-and without the interpolated start (--cold runs every level from the uniform-modulus start). Then the
+summed over the ranks, give a second ratio that other users' processes do not inflate). Printed:
+the estimate against the true error where an exact value is known, the wall times and their ratio,
+and the solves per level (--cold starts every level from the uniform modulus). With --radial, the
 estimator alone on the exact radial flows through a cone and a wedge (verification.radial_flow, Q2,
-4, 8, 16 and 32 cells across the angle). Run: mpirun -n 2 .venv/bin/python demos/accuracy_honesty.py
+4, 8, 16 and 32 cells across the angle).
+Run: mpirun -n 2 .venv/bin/python demos/accuracy_honesty.py --radial
 """
 from __future__ import annotations
 
@@ -34,7 +35,8 @@ NEWTON = ["solver.method=newton", "discretisation.averaging=quadrature", "output
 CASES = {
     "example1_q2": ("example1_extrusion.toml", [], (0.01, 0.003)),
     "example1_q1": ("example1_extrusion.toml", ["discretisation.element=Q1"], (0.01,)),
-    "exact_drawing": ("example2_exact_field.toml", ["material.rate2=1e9", "material.alpha=1e-4"], (0.03, 0.02)),
+    "exact_drawing": ("example2_exact_field.toml", ["material.rate2=1e9", "material.alpha=1e-4"],
+                      (0.03, 0.02)),
     "exact_drawing_paper_law": ("example2_exact_field.toml", [], (0.01,)),
     "copper_wire": ("copper_wire.toml", [], (0.01,)),
 }
@@ -65,21 +67,24 @@ def case_rows(name: str, comm, repeat: int, cold: bool) -> list[list]:
             summary, cpu = cpu_seconds(comm, lambda: sequence(scene, comm, cold))
             accuracy = summary["accuracy"]
             best, best_cpu = min(best, accuracy["wall_time_s"]), min(best_cpu, cpu)
-            final = load_scene(DEMOS / path, [*NEWTON, *overrides,
-                                              f"discretisation.mesh_size={accuracy['meshes'][-1]['mesh_size']}"])
+            finest = accuracy["meshes"][-1]["mesh_size"]
+            final = load_scene(DEMOS / path,
+                               [*NEWTON, *overrides, f"discretisation.mesh_size={finest}"])
             single_run, cpu = cpu_seconds(comm, lambda: solve_scene(final, comm=comm)[2])
             single, single_cpu = min(single, single_run["wall_time_s"]), min(single_cpu, cpu)
         exact = exact_value(scene, quantity)
         true = abs(accuracy["value"] / exact - 1) if exact else math.nan
         meshes = accuracy["meshes"]
-        rows.append([name, quantity, f"{100 * target:g} %", " ".join(f"{m['mesh_size']:.4g}" for m in meshes),
-                     meshes[-1]["dofs"], f"{accuracy['value']:.6g}", f"{accuracy['extrapolated']:.6g}",
+        rows.append([name, quantity, f"{100 * target:g} %",
+                     " ".join(f"{m['mesh_size']:.4g}" for m in meshes), meshes[-1]["dofs"],
+                     f"{accuracy['value']:.6g}", f"{accuracy['extrapolated']:.6g}",
                      f"{exact:.6g}" if exact else "none", f"{accuracy['observed_order']:.3g}",
                      f"{100 * accuracy['estimate']:.3g} %", f"{100 * true:.3g} %" if exact else "",
                      f"{accuracy['estimate'] / true:.2f}" if exact else "",
                      "yes" if accuracy["reached"] else "no",
                      " ".join(str(m["linear_solves"]) for m in meshes), single_run["linear_solves"],
-                     f"{best:.2f}", f"{single:.2f}", f"{best / single:.2f}", f"{best_cpu / single_cpu:.2f}"])
+                     f"{best:.2f}", f"{single:.2f}", f"{best / single:.2f}",
+                     f"{best_cpu / single_cpu:.2f}"])
     return rows
 
 
@@ -98,8 +103,8 @@ def radial_rows(comm) -> list[list]:
             est = relative(found, values[last - 1])
             rows.append([f"{symmetry} n = {n}", " ".join(str(c) for c in cells[:last]),
                          f"{values[last - 1]:.6g}", f"{found.extrapolated:.6g}", f"{exact:.6g}",
-                         f"{found.order:.3g}", f"{100 * est:.3g} %", f"{100 * true:.3g} %", f"{est / true:.2f}",
-                         found.kind.split(":")[0]])
+                         f"{found.order:.3g}", f"{100 * est:.3g} %", f"{100 * true:.3g} %",
+                         f"{est / true:.2f}", found.kind.split(":")[0]])
     return rows
 
 
@@ -107,19 +112,21 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", nargs="*", default=list(CASES), choices=list(CASES))
     parser.add_argument("--repeat", type=int, default=2)
-    parser.add_argument("--cold", action="store_true", help="every level from the uniform-modulus start")
+    parser.add_argument("--cold", action="store_true",
+                        help="every level from the uniform-modulus start")
     parser.add_argument("--radial", action="store_true", help="also the exact radial flows")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     rows = [row for name in args.cases for row in case_rows(name, comm, args.repeat, args.cold)]
-    header = ["case", "quantity", "target", "meshes h", "final dofs", "value", "extrapolated", "exact",
-              "order", "estimate", "true error", "estimate/true", "reached", "solves per level",
-              "single-run solves", "wall s", "single run s", "ratio", "cpu ratio"]
+    header = ["case", "quantity", "target", "meshes h", "final dofs", "value", "extrapolated",
+              "exact", "order", "estimate", "true error", "estimate/true", "reached",
+              "solves per level", "single-run solves", "wall s", "single run s", "ratio",
+              "cpu ratio"]
     text = markdown_table(None, header, rows)
     if args.radial:
-        text += "\n\n" + markdown_table(None, ["radial flow", "cells", "exit stress", "extrapolated", "exact",
-                                               "order", "estimate", "true error", "estimate/true", "rule"],
-                                        radial_rows(comm))
+        columns = ["radial flow", "cells", "exit stress", "extrapolated", "exact", "order",
+                   "estimate", "true error", "estimate/true", "rule"]
+        text += "\n\n" + markdown_table(None, columns, radial_rows(comm))
     if comm.rank == 0:
         print(text)
 

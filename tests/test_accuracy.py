@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.accuracy import FACTOR, MIN_ORDER, estimate, next_mesh_size, observed_order, relative
+from forming_fenicsx.accuracy import (FACTOR, MIN_ORDER, estimate, next_mesh_size, observed_order,
+                                      relative)
 from forming_fenicsx.cli import accuracy_override, main
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.forms import FlowProblem
@@ -56,8 +57,8 @@ def test_oscillating_sequence_uses_the_last_difference_and_no_extrapolation():
 
 
 def test_too_high_order_is_clipped_and_never_below_the_last_difference():
-    """Differences shrinking by 2^10 on halved meshes: order 10 > 2(k + 1) = 6 for Q2, so the estimate is
-    the last difference (Richardson's at order 6 would be 63 times smaller)."""
+    """Differences shrinking by 2^10 on halved meshes: order 10 > 2(k + 1) = 6 for Q2, so the
+    estimate is the last difference (Richardson's at order 6 would be 63 times smaller)."""
     sizes = [0.4, 0.2, 0.1]
     found = estimate(sizes, [1.0 + 1024e-3, 1.001, 1.0 + 1e-3 / 1024], degree=2)
     assert found.order == pytest.approx(10.0, abs=1e-6)
@@ -80,7 +81,8 @@ def test_diverging_sequence_has_order_zero_and_the_guarded_estimate():
     sizes = [0.4, 0.2, 0.1]
     values = [1.0, 1.1, 1.3]  # differences grow
     assert observed_order(sizes, values) == 0.0
-    assert estimate(sizes, values, degree=2).error == pytest.approx(FACTOR * 0.2 / (2**MIN_ORDER - 1), rel=1e-9)
+    guarded = FACTOR * 0.2 / (2**MIN_ORDER - 1)
+    assert estimate(sizes, values, degree=2).error == pytest.approx(guarded, rel=1e-9)
 
 
 def test_next_mesh_size_predicts_from_the_order_within_limits():
@@ -96,8 +98,8 @@ def test_next_mesh_size_predicts_from_the_order_within_limits():
 @pytest.mark.parametrize("element", ["Q1", "Q2"])
 def test_a_linear_velocity_is_carried_exactly_to_another_mesh(element):
     """Point evaluation between two unrelated meshes (and partitions) of Example 1's workpiece."""
-    coarse, fine = (make_scene(discretisation={"element": element, "mesh_size": h, "corner_grading": 8.0})
-                    for h in (1.0, 0.7))
+    coarse, fine = (make_scene(discretisation={"element": element, "mesh_size": h,
+                                               "corner_grading": 8.0}) for h in (1.0, 0.7))
     source = FlowProblem(coarse, build_mesh(coarse))
     target = FlowProblem(fine, build_mesh(fine))
 
@@ -127,9 +129,9 @@ def test_accuracy_flag_and_keys_are_checked():
     assert make_scene(accuracy={"target": 0.01}).accuracy.quantity == "ram_pressure"
 
 
-COARSE_NEWTON = ["--quiet", "--set", "discretisation.mesh_size=0.5", "--set", "solver.method=newton",
-                 "--set", "discretisation.averaging=quadrature", "--set", "output.fields=false",
-                 "--set", "output.figures=false"]
+COARSE_NEWTON = ["--quiet", "--set", "discretisation.mesh_size=0.5", "--set",
+                 "solver.method=newton", "--set", "discretisation.averaging=quadrature", "--set",
+                 "output.fields=false", "--set", "output.figures=false"]
 
 
 def test_forming_run_accuracy_reaches_the_target_with_an_honest_estimate(shared_tmp):
@@ -151,8 +153,8 @@ def test_forming_run_accuracy_reaches_the_target_with_an_honest_estimate(shared_
 
 def test_a_target_not_reached_exits_3_with_the_best_value_and_its_estimate(shared_tmp, capsys):
     out = shared_tmp / "not_reached"
-    assert main(["run", DEMO, "--out", str(out), "--accuracy", "0.5%", "--set", "accuracy.max_levels=3",
-                 *COARSE_NEWTON]) == 3
+    assert main(["run", DEMO, "--out", str(out), "--accuracy", "0.5%", "--set",
+                 "accuracy.max_levels=3", *COARSE_NEWTON]) == 3
     MPI.COMM_WORLD.barrier()
     if MPI.COMM_WORLD.rank == 0:
         assert "accuracy not reached" in capsys.readouterr().err

@@ -49,9 +49,10 @@ class Estimate:
 
 
 def observed_order(sizes: list[float], values: list[float]) -> float:
-    """p with (f1 - f2)/(f2 - f3) = (h1^p - h2^p)/(h2^p - h3^p) for the last three meshes, by bisection
-    (the right side grows with p from ln(h1/h2)/ln(h2/h3) at p = 0); 0 when the ratio lies below
-    that (the differences do not shrink: no convergence seen), NaN when the differences change sign."""
+    """p with (f1 - f2)/(f2 - f3) = (h1^p - h2^p)/(h2^p - h3^p) for the last three meshes, by
+    bisection (the right side grows with p from ln(h1/h2)/ln(h2/h3) at p = 0); 0 when the ratio lies
+    below that (the differences do not shrink: no convergence seen), NaN when the differences change
+    sign."""
     (h1, h2, h3), (f1, f2, f3) = sizes[-3:], values[-3:]
     if (f1 - f2) * (f2 - f3) <= 0:
         return math.nan
@@ -74,16 +75,16 @@ def observed_order(sizes: list[float], values: list[float]) -> float:
 
 
 def richardson_error(sizes: list[float], values: list[float], order: float) -> tuple[float, float]:
-    """The extrapolated value and the error of the finest for a given order p (three last meshes)."""
+    """The extrapolated value and the finest value's error for an order p (last three meshes)."""
     (h2, h3), (f2, f3) = sizes[-2:], values[-2:]
     correction = (f2 - f3) * h3**order / (h2**order - h3**order)
     return f3 - correction, abs(correction)
 
 
 def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
-    """The error estimate of the finest of at least three values on meshes of decreasing sizes (module
-    docstring): Richardson's when the observed order lies in [MIN_ORDER, 2(degree + 1)], else the
-    guarded, less optimistic one."""
+    """The error estimate of the finest of at least three values on meshes of decreasing sizes
+    (module docstring): Richardson's when the observed order lies in [MIN_ORDER, 2(degree + 1)],
+    else the guarded, less optimistic one."""
     if len(values) < 3:
         raise ValueError("an observed order needs three meshes")
     last = abs(values[-1] - values[-2])
@@ -91,8 +92,8 @@ def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
         return Estimate(values[-1], 0.0, math.nan, "the last two values agree")
     order = observed_order(sizes, values)
     if math.isnan(order):
-        return Estimate(math.nan, FACTOR * last, math.nan, "oscillating: the last two values' difference, "
-                        "no extrapolation")
+        return Estimate(math.nan, FACTOR * last, math.nan,
+                        "oscillating: the last two values' difference, no extrapolation")
     highest = 2.0 * (degree + 1)
     if MIN_ORDER <= order <= highest:
         limit, error = richardson_error(sizes, values, order)
@@ -100,8 +101,9 @@ def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
     clipped = min(max(order, MIN_ORDER), highest)
     limit, error = richardson_error(sizes, values, clipped)
     return Estimate(limit, FACTOR * max(error, last), order,
-                    f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not asymptotic): "
-                    f"the larger of Richardson's with order {clipped:g} and the last two values' difference")
+                    f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not "
+                    f"asymptotic): the larger of Richardson's with order {clipped:g} and the last "
+                    "two values' difference")
 
 
 def relative(found: Estimate, value: float) -> float:
@@ -112,9 +114,9 @@ def relative(found: Estimate, value: float) -> float:
 
 def next_mesh_size(size: float, found: Estimate | None, relative_error: float, target: float,
                    ratio: float) -> float:
-    """The next level's mesh size: size/ratio until an asymptotic estimate exists, then the size that the
-    observed order predicts for SAFETY times the target, refined by a factor within [MIN_RATIO,
-    MAX_RATIO]."""
+    """The next level's mesh size: size/ratio until an asymptotic estimate exists, then the size
+    that the observed order predicts for SAFETY times the target, refined by a factor within
+    [MIN_RATIO, MAX_RATIO]."""
     if found is None or found.kind != "richardson":
         return size / ratio
     wanted = (relative_error / (SAFETY * target)) ** (1.0 / found.order)
@@ -122,8 +124,8 @@ def next_mesh_size(size: float, found: Estimate | None, relative_error: float, t
 
 
 def level_scene(scene: Scene, size: float) -> Scene:
-    """The scene on a mesh of size ``size``; a friction mollification length equal to the scene's mesh
-    size (its default: one element) follows the mesh."""
+    """The scene on a mesh of size ``size``; a friction mollification length equal to the scene's
+    mesh size (its default: one element) follows the mesh."""
     level = copy.deepcopy(scene)
     level.discretisation.mesh_size = size
     level.discretisation.mesh_size_relative = size / scene.geometry.thinnest
@@ -139,7 +141,8 @@ def first_mesh_size(scene: Scene) -> float:
     return min(scene.discretisation.mesh_size * scene.accuracy.ratio**2, scene.geometry.thinnest)
 
 
-Solve = Callable[[Scene, "dolfinx.fem.Function | None"], tuple[FlowProblem, SolveResult, dict[str, Any]]]
+Solve = Callable[[Scene, "dolfinx.fem.Function | None"],
+                 tuple[FlowProblem, SolveResult, dict[str, Any]]]
 
 
 def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
@@ -162,16 +165,18 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         previous = problem.u
         sizes.append(size)
         values.append(float(summary[quantity]))
-        levels.append({"mesh_size": size, "dofs": summary["dofs"], "linear_solves": summary["linear_solves"],
-                       "wall_time_s": summary["wall_time_s"], quantity: summary[quantity],
-                       "converged": summary["converged"], "started_from": summary["restarted_from"]})
+        level = {key: summary[key] for key in ("dofs", "linear_solves", "wall_time_s", quantity)}
+        levels.append({"mesh_size": size, **level, "converged": summary["converged"],
+                       "started_from": summary["restarted_from"]})
         if len(values) >= 3:
             found = estimate(sizes, values, scene.discretisation.degree)
             error = float(relative(found, values[-1]))
         if comm.rank == 0:
-            note = f", estimated error {100 * error:.3g} % ({found.kind.split(':')[0]})" if found else ""
-            log.info("accuracy level %d: h = %.4g, %d dofs, %s = %.6g, %d solves, %.1f s%s", len(sizes), size,
-                     summary["dofs"], quantity, values[-1], summary["linear_solves"], summary["wall_time_s"], note)
+            note = f", estimated error {100 * error:.3g} % ({found.kind.split(':')[0]})" if found \
+                else ""
+            log.info("accuracy level %d: h = %.4g, %d dofs, %s = %.6g, %d solves, %.1f s%s",
+                     len(sizes), size, summary["dofs"], quantity, values[-1],
+                     summary["linear_solves"], summary["wall_time_s"], note)
         if not summary["converged"]:
             reason = f"the run on mesh size {size:.4g} did not converge: {summary['reason']}"
             break
@@ -179,8 +184,8 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
             reason = f"estimated error {100 * error:.3g} % <= target {100 * target:g} %"
             break
         if len(sizes) == settings.max_levels:
-            reason = (f"target {100 * target:g} % not reached in accuracy.max_levels = {settings.max_levels} "
-                      f"meshes (estimated error {100 * error:.3g} %)")
+            reason = (f"target {100 * target:g} % not reached in accuracy.max_levels = "
+                      f"{settings.max_levels} meshes (estimated error {100 * error:.3g} %)")
             break
         size = next_mesh_size(size, found, error, target, settings.ratio)
     reached = bool(summary["converged"] and error <= target)

@@ -48,7 +48,8 @@ def accuracy_override(text: str) -> str:
     try:
         value = float(text.strip().removesuffix("%")) / (100 if percent else 1)
     except ValueError:
-        raise SceneError("--accuracy", f"must be a relative error such as 1% or 0.01; got {text!r}") from None
+        raise SceneError("--accuracy",
+                         f"must be a relative error such as 1% or 0.01; got {text!r}") from None
     return f"accuracy.target={value!r}"
 
 
@@ -73,8 +74,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
     run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
-    run.add_argument("--accuracy", metavar="TARGET", help="refine the mesh until the estimated relative error of "
-                     "the main quantity is below TARGET (1%%, 0.3%% or 0.01): accuracy.target")
+    run.add_argument("--accuracy", metavar="TARGET",
+                     help="refine the mesh until the estimated relative error of the main quantity "
+                     "is below TARGET (1%%, 0.3%% or 0.01): accuracy.target")
     study = sub.add_parser("study", help="run a grid of variations of a scene; errors, costs, Pareto plot")
     study.add_argument("scene", help="scene TOML file, or a study file (a [study] table: scene, vary, set, quantity)")
     study.add_argument("--vary", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
@@ -201,9 +203,9 @@ def main(argv: list[str] | None = None) -> int:
     if not summary.get("accuracy", {"reached": True})["reached"]:
         accuracy = summary["accuracy"]
         if comm.rank == 0:
-            print(f"forming: accuracy not reached: {accuracy['reason']}; the finest mesh's results are in {out} "
-                  f"({accuracy['quantity']} = {accuracy['value']:.6g}, estimated error "
-                  f"{100 * accuracy['estimate']:.3g} %)", file=sys.stderr)
+            print(f"forming: accuracy not reached: {accuracy['reason']}; the finest mesh's "
+                  f"results are in {out} ({accuracy['quantity']} = {accuracy['value']:.6g}, "
+                  f"estimated error {100 * accuracy['estimate']:.3g} %)", file=sys.stderr)
         return 3
     return 0
 

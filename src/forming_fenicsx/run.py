@@ -35,9 +35,9 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
-    folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another mesh
-    of the workpiece that starts it interpolated (transfer.py). Timed from when every rank has entered
-    (a rank still starting its interpreter is not the run's time)."""
+    folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
+    mesh of the workpiece that starts it interpolated (transfer.py). Timed from when every rank has
+    entered (a rank still starting its interpreter is not the run's time)."""
     comm.barrier()
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
@@ -145,11 +145,12 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
     else:
         if restart is not None:
-            raise ValueError("--restart starts one run on the same mesh; accuracy.target runs a sequence "
-                             "of meshes, each started from the previous one: give one or the other")
+            raise ValueError("--restart starts one run on the same mesh; accuracy.target runs a "
+                             "sequence of meshes, each started from the previous one: give one or "
+                             "the other")
         problem, result, summary = solve_to_accuracy(
-            scene, lambda level, previous: solve_scene(level, petsc_options, comm, stop, previous=previous),
-            comm)
+            scene, lambda level, previous: solve_scene(level, petsc_options, comm, stop,
+                                                       previous=previous), comm)
     save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
@@ -169,8 +170,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                  summary["linear_solves"], summary["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]
-            log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target %g %%) on %d "
-                     "meshes, %.1f s: %s", accuracy["quantity"], accuracy["value"], accuracy["extrapolated"],
-                     100 * accuracy["estimate"], 100 * accuracy["target"], len(accuracy["meshes"]),
-                     accuracy["wall_time_s"], accuracy["reason"])
+            log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target "
+                     "%g %%) on %d meshes, %.1f s: %s", accuracy["quantity"], accuracy["value"],
+                     accuracy["extrapolated"], 100 * accuracy["estimate"], 100 * accuracy["target"],
+                     len(accuracy["meshes"]), accuracy["wall_time_s"], accuracy["reason"])
     return summary

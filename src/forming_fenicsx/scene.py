@@ -550,17 +550,19 @@ class Output:
 
 
 # The summary numbers accuracy on demand can drive, by process; the first is the default
-ACCURACY_QUANTITIES = {"extrusion": ("ram_pressure", "ram_force", "die_force_x", "mean_hydrostatic_pressure"),
-                       "drawing": ("drawing_stress", "drawing_force", "die_force_x", "mean_die_pressure")}
+ACCURACY_QUANTITIES = {
+    "extrusion": ("ram_pressure", "ram_force", "die_force_x", "mean_hydrostatic_pressure"),
+    "drawing": ("drawing_stress", "drawing_force", "die_force_x", "mean_die_pressure")}
 
 
 @dataclass
 class Accuracy:
-    """Accuracy on demand (accuracy.py): with a ``target`` (relative, e.g. 0.01), the scene is solved on
-    meshes of sizes h_0 > h_1 > ..., each started from the previous solution, until the estimated
-    relative error of ``quantity`` (default: ram_pressure, drawing_stress) is below the target or
-    ``max_levels`` meshes are used. ``ratio`` is the refinement h_k/h_(k+1) of the first levels; the
-    scene's mesh size is the third level's. No target (the default): one run on the scene's mesh."""
+    """Accuracy on demand (accuracy.py): with a ``target`` (relative, e.g. 0.01), the scene is
+    solved on meshes of sizes h_0 > h_1 > ..., each started from the previous solution, until the
+    estimated relative error of ``quantity`` (default: ram_pressure, drawing_stress) is below the
+    target or ``max_levels`` meshes are used. ``ratio`` is the refinement h_k/h_(k+1) of the first
+    levels; the scene's mesh size is the third level's. No target (the default): one run on the
+    scene's mesh."""
 
     target: float | None = None
     quantity: str | None = None
@@ -569,13 +571,14 @@ class Accuracy:
 
     def check(self) -> None:
         if self.target is not None and not 0 < self.target < 1:
-            raise SceneError("accuracy.target", f"must lie in (0, 1) (a relative error, 0.01 is 1 %); "
-                             f"got {self.target}")
+            raise SceneError("accuracy.target", "must lie in (0, 1) (a relative error, 0.01 is "
+                             f"1 %); got {self.target}")
         if not 1.25 <= self.ratio <= 4:
-            raise SceneError("accuracy.ratio", f"must lie in [1.25, 4] (h_k/h_(k+1)); got {self.ratio}")
+            raise SceneError("accuracy.ratio",
+                             f"must lie in [1.25, 4] (h_k/h_(k+1)); got {self.ratio}")
         if not 3 <= self.max_levels <= 12:
-            raise SceneError("accuracy.max_levels", "must be an integer in [3, 12] (three meshes give the "
-                             f"first estimate); got {self.max_levels}")
+            raise SceneError("accuracy.max_levels", "must be an integer in [3, 12] (three meshes "
+                             f"give the first estimate); got {self.max_levels}")
 
 
 # The geometry of each process and geometry.die (the first is the default)

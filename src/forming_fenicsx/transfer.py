@@ -16,8 +16,9 @@ from .compat import colliding_cells
 
 
 def transfer(source: dolfinx.fem.Function, target: dolfinx.fem.Function) -> int:
-    """target <- source at target's nodes (collective; both vector Lagrange functions on meshes of one
-    communicator). Returns how many nodes lay outside the source mesh and took the nearest node's value."""
+    """target <- source at target's nodes (collective; both vector Lagrange functions on meshes of
+    one communicator). Returns how many nodes lay outside the source mesh and took the value of the
+    nearest node."""
     space = target.function_space
     comm = space.mesh.comm
     block = space.dofmap.index_map_bs
