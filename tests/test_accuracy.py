@@ -14,6 +14,7 @@ from forming_fenicsx.cli import accuracy_override, main
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
+from forming_fenicsx.scene import load_scene
 from forming_fenicsx.transfer import transfer
 
 from conftest import make_scene
@@ -95,11 +96,25 @@ def test_next_mesh_size_predicts_from_the_order_within_limits():
     assert next_mesh_size(0.1, None, math.inf, 0.01, 2.0) == pytest.approx(0.05)
 
 
-@pytest.mark.parametrize("element", ["Q1", "Q2"])
-def test_a_linear_velocity_is_carried_exactly_to_another_mesh(element):
-    """Point evaluation between two unrelated meshes (and partitions) of Example 1's workpiece."""
-    coarse, fine = (make_scene(discretisation={"element": element, "mesh_size": h,
-                                               "corner_grading": 8.0}) for h in (1.0, 0.7))
+ROD = Path(__file__).parents[1] / "demos" / "aluminium_rod.toml"
+
+
+def _meshes(case: str, element: str) -> tuple:
+    """Two unrelated meshes of one workpiece: Example 1's (straight edges), or the aluminium rod's
+    die with its 5 mm entry radius (curved: nodes of the finer mesh lie outside the coarser)."""
+    if case == "square":
+        return tuple(make_scene(discretisation={"element": element, "mesh_size": h,
+                                                "corner_grading": 8.0}) for h in (1.0, 0.7))
+    return tuple(load_scene(ROD, [f"discretisation.element={element}",
+                                  f"discretisation.mesh_size={h}"]) for h in (3.0, 1.3))
+
+
+@pytest.mark.parametrize("case, element, outside", [("square", "Q1", 0), ("square", "Q2", 0),
+                                                    ("curved", "Q1", 2), ("curved", "Q2", 6)])
+def test_a_linear_velocity_is_carried_exactly_to_another_mesh(case, element, outside):
+    """Point evaluation between two unrelated meshes (and partitions); a node outside the old mesh
+    takes the old field extended from the nearest cell, exact for a linear field too."""
+    coarse, fine = _meshes(case, element)
     source = FlowProblem(coarse, build_mesh(coarse))
     target = FlowProblem(fine, build_mesh(fine))
 
@@ -109,7 +124,7 @@ def test_a_linear_velocity_is_carried_exactly_to_another_mesh(element):
     source.u.interpolate(linear)
     carried = target.u.copy()
     carried.x.array[:] = np.nan
-    assert transfer(source.u, carried) == 0
+    assert transfer(source.u, carried) == outside
     points = carried.function_space.tabulate_dof_coordinates()
     error = np.abs(carried.x.array.reshape(-1, 2) - linear(points.T).T).max()
     assert MPI.COMM_WORLD.allreduce(error, op=MPI.MAX) < 1e-12

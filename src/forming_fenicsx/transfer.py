@@ -4,21 +4,21 @@ Lagrange space, by point evaluation in the old mesh's cell that holds x_i.
 
 Both meshes are distributed over the same communicator with unrelated partitions, so every rank
 evaluates the old field at all new nodes that lie in its own cells and the values are summed over
-the ranks. A new node outside the old mesh (a curved die wall whose chords differ from mesh to mesh)
-takes the value of the nearest old node: the result is a starting iterate, not an answer.
+the ranks. A new node outside the old mesh (at a curved die wall, whose element edges differ from
+mesh to mesh) takes the old field extended from a cell of the old node nearest to it.
 """
 from __future__ import annotations
 
 import dolfinx.fem
 import numpy as np
 
-from .compat import colliding_cells
+from .compat import cell_dofs, colliding_cells
 
 
 def transfer(source: dolfinx.fem.Function, target: dolfinx.fem.Function) -> int:
     """target <- source at target's nodes (collective; both vector Lagrange functions on meshes of
-    one communicator). Returns how many nodes lay outside the source mesh and took the value of the
-    nearest node."""
+    one communicator). Returns how many nodes lay outside the source mesh (their values extended
+    from the nearest cell)."""
     space = target.function_space
     comm = space.mesh.comm
     block = space.dofmap.index_map_bs
@@ -34,7 +34,7 @@ def transfer(source: dolfinx.fem.Function, target: dolfinx.fem.Function) -> int:
     values = comm.allreduce(values)
     outside = np.flatnonzero(count == 0)
     if len(outside):
-        values[outside] = _nearest_node_values(source, points[outside])
+        values[outside] = _nearest_cell_values(source, points[outside])
     values /= np.maximum(count, 1.0)[:, None]
     start = sum(comm.allgather(owned)[:comm.rank])
     target.x.array[:owned * block] = values[start:start + owned].ravel()
@@ -42,20 +42,23 @@ def transfer(source: dolfinx.fem.Function, target: dolfinx.fem.Function) -> int:
     return len(outside)
 
 
-def _nearest_node_values(source: dolfinx.fem.Function, points: np.ndarray) -> np.ndarray:
-    """The value of the source's node nearest to each point, over all ranks (collective)."""
+def _nearest_cell_values(source: dolfinx.fem.Function, points: np.ndarray) -> np.ndarray:
+    """The source field at points outside its mesh, extended from a cell that holds the source node
+    nearest to each point (the cell's polynomial evaluated beyond it); over all ranks
+    (collective)."""
     space = source.function_space
     comm = space.mesh.comm
-    block = space.dofmap.index_map_bs
-    owned = space.dofmap.index_map.size_local
-    nodes = space.tabulate_dof_coordinates()[:owned]
-    node_values = source.x.array[:owned * block].reshape(-1, block)
+    nodes = space.tabulate_dof_coordinates()
+    dofs = cell_dofs(space.dofmap)
     best = np.full(len(points), np.inf)
-    chosen = np.zeros((len(points), block))
+    cells = np.full(len(points), -1, dtype=np.int32)
     for i, point in enumerate(points):
-        if len(nodes):
+        if len(dofs):
             distances = np.einsum("ij,ij->i", nodes - point, nodes - point)
             nearest = int(np.argmin(distances))
-            best[i], chosen[i] = distances[nearest], node_values[nearest]
-    ranks = np.argmin(np.array(comm.allgather(best)), axis=0)  # the rank of the nearest node
-    return comm.allreduce(np.where((ranks == comm.rank)[:, None], chosen, 0.0))
+            best[i], cells[i] = distances[nearest], np.flatnonzero((dofs == nearest).any(axis=1))[0]
+    mine = np.argmin(np.array(comm.allgather(best)), axis=0) == comm.rank  # the nearest node's rank
+    values = np.zeros((len(points), space.dofmap.index_map_bs))
+    if mine.any():
+        values[mine] = source.eval(points[mine], cells[mine])
+    return comm.allreduce(values)
