@@ -180,3 +180,16 @@ def test_a_target_not_reached_exits_3_with_the_best_value_and_its_estimate(share
     assert "max_levels = 3" in accuracy["reason"] and len(accuracy["meshes"]) == 3
     assert accuracy["estimate"] > 0.005 and accuracy["value"] == summary["ram_pressure"]
     assert accuracy["meshes"][2]["started_from"] == "the velocity on mesh size 1, interpolated"
+
+
+def test_a_level_that_does_not_converge_ends_the_sequence(shared_tmp):
+    """Its files are written; the value and estimate are the last converged level's (none here)."""
+    out = shared_tmp / "level_fails"
+    assert main(["run", DEMO, "--out", str(out), "--accuracy", "1%", "--set",
+                 "solver.max_iterations=2", *COARSE_NEWTON]) == 3
+    MPI.COMM_WORLD.barrier()
+    summary = json.loads((out / "summary.json").read_text())
+    accuracy = summary["accuracy"]
+    assert summary["converged"] is False and accuracy["reached"] is False
+    assert "did not converge" in accuracy["reason"] and len(accuracy["meshes"]) == 1
+    assert accuracy["value"] is None and accuracy["meshes"][0]["converged"] is False

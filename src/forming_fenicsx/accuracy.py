@@ -150,7 +150,8 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
     """Solve on finer meshes, each started from the previous velocity (``solve(level, previous)``:
     run.solve_scene), until the estimated relative error of the scene's accuracy.quantity is below
     accuracy.target, a level does not converge, or accuracy.max_levels are used. Returns the last
-    level's problem, iteration and summary, the summary with an ``accuracy`` table."""
+    level's problem, iteration and summary, the summary with an ``accuracy`` table (whose value and
+    estimate are the last converged level's)."""
     settings = scene.accuracy
     quantity, target = settings.quantity, settings.target
     start = time.perf_counter()
@@ -163,11 +164,15 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         if sizes:  # the run says where it started
             summary["restarted_from"] = f"the velocity on mesh size {sizes[-1]:.6g}, interpolated"
         previous = problem.u
-        sizes.append(size)
-        values.append(float(summary[quantity]))
         level = {key: summary[key] for key in ("dofs", "linear_solves", "wall_time_s", quantity)}
         levels.append({"mesh_size": size, **level, "converged": summary["converged"],
                        "started_from": summary["restarted_from"]})
+        if not summary["converged"]:  # the value and estimate stay the previous mesh's
+            reason = (f"the run on mesh size {size:.4g} did not converge: {summary['reason']}; the "
+                      "value and estimate are those of the previous mesh")
+            break
+        sizes.append(size)
+        values.append(float(summary[quantity]))
         if len(values) >= 3:
             found = estimate(sizes, values, scene.discretisation.degree)
             error = float(relative(found, values[-1]))
@@ -177,13 +182,10 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
             log.info("accuracy level %d: h = %.4g, %d dofs, %s = %.6g, %d solves, %.1f s%s",
                      len(sizes), size, summary["dofs"], quantity, values[-1],
                      summary["linear_solves"], summary["wall_time_s"], note)
-        if not summary["converged"]:
-            reason = f"the run on mesh size {size:.4g} did not converge: {summary['reason']}"
-            break
         if error <= target:
             reason = f"estimated error {100 * error:.3g} % <= target {100 * target:g} %"
             break
-        if len(sizes) == settings.max_levels:
+        if len(levels) == settings.max_levels:
             reason = (f"target {100 * target:g} % not reached in accuracy.max_levels = "
                       f"{settings.max_levels} meshes (estimated error {100 * error:.3g} %)")
             break
@@ -191,7 +193,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
     reached = bool(summary["converged"] and error <= target)
     summary["accuracy"] = {
         "target": target, "quantity": quantity, "reached": reached, "reason": reason,
-        "value": values[-1],
+        "value": values[-1] if values else math.nan,
         "extrapolated": found.extrapolated if found else math.nan,
         "estimate": error, "estimate_absolute": found.error if found else math.nan,
         "observed_order": found.order if found else math.nan,
