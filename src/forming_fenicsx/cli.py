@@ -42,6 +42,17 @@ def _is_number(text: str) -> bool:
     return True
 
 
+def accuracy_override(text: str) -> str:
+    """``--accuracy 1%`` or ``--accuracy 0.01`` as the override accuracy.target=0.01."""
+    percent = text.strip().endswith("%")
+    try:
+        value = float(text.strip().removesuffix("%")) / (100 if percent else 1)
+    except ValueError:
+        raise SceneError("--accuracy",
+                         f"must be a relative error such as 1% or 0.01; got {text!r}") from None
+    return f"accuracy.target={value!r}"
+
+
 def _is_study(path: str) -> bool:
     """A study file has a [study] table (scene files have none)."""
     import tomllib
@@ -63,6 +74,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
     run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
+    run.add_argument("--accuracy", metavar="TARGET",
+                     help="refine the mesh until the estimated relative error of the main quantity "
+                     "is below TARGET (1%%, 0.3%% or 0.01): accuracy.target")
     study = sub.add_parser("study", help="run a grid of variations of a scene: a design sweep "
                            "(quantities against a parameter, optimum) or errors against costs")
     study.add_argument("scene", help="scene TOML file, or a study file (a [study] table: scene, vary, set, quantity)")
@@ -146,7 +160,8 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; "
                       f"{out}/study.json, study.csv, study.md{', ' + figures if figures else ''}")
             return 0
-        scene = load_scene(args.scene, args.set)
+        accuracy = [accuracy_override(args.accuracy)] if getattr(args, "accuracy", None) else []
+        scene = load_scene(args.scene, [*args.set, *accuracy])
         petsc_options = petsc_options_from_args(petsc_args)
     except SceneError as error:
         if comm.rank == 0:
@@ -193,6 +208,13 @@ def main(argv: list[str] | None = None) -> int:
         if comm.rank == 0:
             print(f"forming: not converged: {summary['reason']}; the last iterate's results are in {out}",
                   file=sys.stderr)
+        return 3
+    if not summary.get("accuracy", {"reached": True})["reached"]:
+        accuracy = summary["accuracy"]
+        if comm.rank == 0:
+            print(f"forming: accuracy not reached: {accuracy['reason']}; the finest mesh's "
+                  f"results are in {out} ({accuracy['quantity']} = {accuracy['value']:.6g}, "
+                  f"estimated error {100 * accuracy['estimate']:.3g} %)", file=sys.stderr)
         return 3
     return 0
 

@@ -78,13 +78,20 @@ def quadrature_points(mesh, degree: int) -> np.ndarray:
     return basix.make_quadrature(cell, degree)[0]
 
 
+def cell_dofs(dofmap) -> np.ndarray:
+    """The (unblocked) degrees of freedom of every local cell, shape (cells, dofs per cell)."""
+    if LEGACY:
+        return dofmap.list.array.reshape(-1, dofmap.dof_layout.num_dofs)
+    return np.asarray(dofmap.list)
+
+
 def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx.fem.Expression) -> None:
     """function <- expression evaluated at the Gauss points of every local cell (then ghosts updated)."""
     mesh = function.function_space.mesh
     cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
     values = expression.eval(cells) if LEGACY else expression.eval(mesh, cells)
     dofmap = function.function_space.dofmap
-    dofs = (dofmap.list.array.reshape(-1, dofmap.dof_layout.num_dofs) if LEGACY else dofmap.list)[cells]
+    dofs = cell_dofs(dofmap)[cells]
     block = dofmap.index_map_bs
     function.x.array.reshape(-1, block)[dofs.ravel()] = values.reshape(dofs.size, block)
     function.x.scatter_forward()
@@ -119,9 +126,8 @@ def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
         tree = geometry.bb_tree(mesh, tdim)
         candidates = geometry.compute_collisions_points(tree, points)
     colliding = geometry.compute_colliding_cells(mesh, candidates, points)
+    offsets = np.asarray(colliding.offsets)
     cells = np.full(len(points), -1, dtype=np.int32)
-    for i in range(len(points)):
-        links = colliding.links(i)
-        if len(links):
-            cells[i] = links[0]
+    hit = offsets[1:] > offsets[:-1]
+    cells[hit] = np.asarray(colliding.array)[offsets[:-1][hit]]  # the first colliding cell of each
     return cells

@@ -13,6 +13,7 @@ from typing import Any, Callable
 import dolfinx
 from mpi4py import MPI
 
+from .accuracy import solve_to_accuracy
 from .forms import FlowProblem
 from .geometry import build_mesh
 from .newton import NewtonSolver
@@ -24,18 +25,21 @@ from .sanity import check_run
 from .units import DIMENSIONS
 from .scene import Scene
 from .solvers import SecantSolver, SolveResult
+from .transfer import transfer
 
 log = logging.getLogger(__name__)
 
 
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
                 stop: Callable[[], str | None] | None = None,
-                restart: Path | None = None) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+                restart: Path | None = None, previous: dolfinx.fem.Function | None = None
+                ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
-    folder whose velocity.npz (same mesh) starts the iteration. Timed from when every rank has entered (a
-    rank still starting its interpreter is not the run's time)."""
+    folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
+    mesh of the workpiece that starts it interpolated (transfer.py). Timed from when every rank has
+    entered (a rank still starting its interpreter is not the run's time)."""
     comm.barrier()
     start = time.perf_counter()
     problem = FlowProblem(scene, build_mesh(scene, comm))
@@ -43,6 +47,9 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     if restart is not None:
         initial = problem.u.copy()
         load_velocity(Path(restart) / "velocity.npz", initial)
+    elif previous is not None:
+        initial = problem.u.copy()
+        transfer(previous, initial)
     method = NewtonSolver if scene.solver.method == "newton" else SecantSolver
     solver = method(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
     setup = time.perf_counter() - start
@@ -136,7 +143,16 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
 
 def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
                      title: str, stop: Callable[[], str | None] | None, restart: Path | None) -> dict[str, Any]:
-    problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
+    if scene.accuracy.target is None:
+        problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
+    else:
+        if restart is not None:
+            raise ValueError("--restart starts one run on the same mesh; accuracy.target runs a "
+                             "sequence of meshes, each started from the previous one: give one or "
+                             "the other")
+        problem, result, summary = solve_to_accuracy(
+            scene, lambda level, previous: solve_scene(level, petsc_options, comm, stop,
+                                                       previous=previous), comm)
     save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
@@ -169,4 +185,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
                  summary[key], f" {unit}" if unit else "", summary["force_balance_residual"],
                  summary["linear_solves"], summary["wall_time_s"])
+        if "accuracy" in summary:
+            accuracy = summary["accuracy"]
+            log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target "
+                     "%g %%) on %d meshes, %.1f s: %s", accuracy["quantity"], accuracy["value"],
+                     accuracy["extrapolated"], 100 * accuracy["estimate"], 100 * accuracy["target"],
+                     len(accuracy["meshes"]), accuracy["wall_time_s"], accuracy["reason"])
     return summary

@@ -614,6 +614,38 @@ class Thermal:
                 raise SceneError(f"thermal.{key}", f"must lie in [0, 1]; got {getattr(self, key)}")
 
 
+# The summary numbers accuracy on demand can drive, by process; the first is the default
+ACCURACY_QUANTITIES = {
+    "extrusion": ("ram_pressure", "ram_force", "die_force_x", "mean_hydrostatic_pressure"),
+    "drawing": ("drawing_stress", "drawing_force", "die_force_x", "mean_die_pressure")}
+
+
+@dataclass
+class Accuracy:
+    """Accuracy on demand (accuracy.py): with a ``target`` (relative, e.g. 0.01), the scene is
+    solved on meshes of sizes h_0 > h_1 > ..., each started from the previous solution, until the
+    estimated relative error of ``quantity`` (default: ram_pressure, drawing_stress) is below the
+    target or ``max_levels`` meshes are used. ``ratio`` is the refinement h_k/h_(k+1) of the first
+    levels; the scene's mesh size is the third level's. No target (the default): one run on the
+    scene's mesh."""
+
+    target: float | None = None
+    quantity: str | None = None
+    ratio: float = 2.0
+    max_levels: int = 6
+
+    def check(self) -> None:
+        if self.target is not None and not 0 < self.target < 1:
+            raise SceneError("accuracy.target", "must lie in (0, 1) (a relative error, 0.01 is "
+                             f"1 %); got {self.target}")
+        if not 1.25 <= self.ratio <= 4:
+            raise SceneError("accuracy.ratio",
+                             f"must lie in [1.25, 4] (h_k/h_(k+1)); got {self.ratio}")
+        if not 3 <= self.max_levels <= 12:
+            raise SceneError("accuracy.max_levels", "must be an integer in [3, 12] (three meshes "
+                             f"give the first estimate); got {self.max_levels}")
+
+
 # The geometry of each process and geometry.die (the first is the default)
 GEOMETRIES = {"extrusion": {"square": ExtrusionGeometry, "conical": ConicalExtrusionGeometry},
               "drawing": {"conical": DrawingGeometry}}
@@ -657,6 +689,7 @@ class Scene:
     output: Output
     units: Units = field(default_factory=Units)
     thermal: Thermal | None = None  # only when the scene has [thermal]
+    accuracy: Accuracy = field(default_factory=Accuracy)
 
     def resolve(self) -> None:
         """Turn the values left out or given relative into absolute ones, in the order they depend on each
@@ -702,6 +735,12 @@ class Scene:
                                                                          thermal.die_temperature):
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
+        quantities = ACCURACY_QUANTITIES[self.process.kind]
+        if self.accuracy.quantity is None:
+            self.accuracy.quantity = quantities[0]
+        elif self.accuracy.quantity not in quantities:
+            raise SceneError("accuracy.quantity", f"must be one of {', '.join(quantities)} for "
+                             f"{self.process.kind}; got {self.accuracy.quantity!r}")
         if self.discretisation.mesh_size > self.geometry.thinnest:
             raise SceneError("discretisation.mesh_size",
                              f"must be <= the thinnest half-thickness ({self.geometry.thinnest}) so that "
@@ -811,7 +850,7 @@ def _material(table: dict[str, Any], defaults: dict[str, Any], units: dict[str, 
 
 
 SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver", "output",
-            "units", "thermal")
+            "units", "thermal", "accuracy")
 
 
 def scene_from_dict(data: dict[str, Any]) -> Scene:
@@ -832,7 +871,8 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     process = _build(Process, tables["process"], "process", defaults.get("process"))
     process.check()
     classes = {"geometry": geometry_class(kind, tables["geometry"]), "friction": Friction, "penalty": Penalty,
-               "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units}
+               "discretisation": Discretisation, "solver": Solver, "output": Output, "units": Units,
+               "accuracy": Accuracy}
     built = {name: _build(cls, tables[name], name, defaults.get(name)) for name, cls in classes.items()}
     if "thermal" in data:  # heat transfer only when the scene asks for it
         if kind == "drawing":
