@@ -112,13 +112,15 @@ def configure_logging(quiet: bool, rank: int) -> None:
         if _not_a_compiler_line not in handler.filters:
             handler.addFilter(_not_a_compiler_line)
     log.propagate = False
-    if rank == 0:
-        handler = logging.StreamHandler(sys.stdout)
-        handler.setFormatter(logging.Formatter("%(message)s"))
-        log.addHandler(handler)
-    else:
-        log.addHandler(logging.NullHandler())
+    for handler in [h for h in log.handlers if getattr(h, "forming_cli", False)]:
+        log.removeHandler(handler)  # a previous main() in this process (its stdout may be gone)
+    handler = logging.StreamHandler(sys.stdout) if rank == 0 else logging.NullHandler()
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    handler.forming_cli = True
+    log.addHandler(handler)
     log.setLevel(logging.WARNING if quiet else logging.INFO)
+    # every iterate's line, unless the command quiets them again (a study: one line per run)
+    logging.getLogger("forming_fenicsx.solvers").setLevel(logging.NOTSET)
 
 
 def main(argv: list[str] | None = None) -> int:
