@@ -100,25 +100,35 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     e, e_du, e_v = c.strain_rate(u), c.strain_rate(du), c.strain_rate(v)
     symmetric_coupling = (c.deviatoric_product(e, e_du) * ufl.inner(dual, e_v)
                           + c.deviatoric_product(e, e_v) * ufl.inner(dual, e_du)) / 3.0  # 2/3 of the mean
-    energy = material.potential_ufl(rate(u), problem.strain) * problem.dx
+    # Phi = int W(rate) + the other terms' energies; the residual takes the flow law's term from its
+    # stress, 2/3 G e'(u):e'(v), the exact derivative of int W: a law whose W is a quadrature (no closed
+    # form) then moves only the line search's merit, not the answer
+    flow_energy = material.potential_ufl(rate(u), problem.strain) * problem.dx
+    others = []  # the energies of the other terms
     operator = (2.0 / 3.0 * g * c.deviatoric_product(e_du, e_v) + coupling * symmetric_coupling) * problem.dx
     if problem.mixed:
         operator -= (dp * c.divergence(v) + q * c.divergence(du)) * problem.dx
     else:
-        energy += 0.5 / scene.penalty.d * c.divergence(u) ** 2 * problem.dx_vol
+        others.append(0.5 / scene.penalty.d * c.divergence(u) ** 2 * problem.dx_vol)
         operator += problem.volumetric_form(du, v)
     if problem.has_contact:  # the active set of its second derivative: at u, joined with the previous iterate's
-        energy += contact.contact_energy(u, problem.n, scene.penalty.d_N, problem.multiplier_value, problem.ds_contact)
+        others.append(contact.contact_energy(u, problem.n, scene.penalty.d_N, problem.multiplier_value,
+                                             problem.ds_contact))
         active = ufl.max_value(problem.contact_active(u), problem.contact_active(u_previous))
         operator += contact.contact_form(du, v, active, problem.n, scene.penalty.d_N, problem.ds_contact)
     if problem.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
         tau_f, d_T = problem.friction_bound(), scene.friction.d_T
-        energy += friction.regularised_functional(tau_f, u, problem.n, d_T) * problem.ds_contact
+        others.append(friction.regularised_functional(tau_f, u, problem.n, d_T) * problem.ds_contact)
         operator += friction.newton_form(du, v, u, tau_f, problem.n, d_T,
                                          friction.SLOW_SLIP * abs(scene.process.velocity), problem.ds_contact)
     if problem.has_force:
-        energy -= ufl.action(problem.load(v), w)
-    residual = ufl.derivative(energy, w, test)
+        others.append(-ufl.action(problem.load(v), w))
+    residual = 2.0 / 3.0 * material.secant_ufl(rate(u), problem.strain) * c.deviatoric_product(e, e_v) \
+        * problem.dx
+    energy = flow_energy
+    for term in others:
+        residual += ufl.derivative(term, w, test)
+        energy += term
     if problem.mixed:  # the energy (no pressure) stays a merit function: every step keeps (q, div u) = 0
         residual -= (p * c.divergence(v) + q * c.divergence(u)) * problem.dx
     # the full dual Newton step tau(u) - d tau(du) at the old u (whatever primal step the line search
