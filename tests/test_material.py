@@ -124,3 +124,52 @@ def test_named_material_cited_and_overridden():
     assert scene_from_dict(data).material.K == 400.0
     with pytest.raises(SceneError, match="quadrature"):
         scene_from_dict({**data, "discretisation": {"averaging": "nodes"}})
+
+
+def test_sellars_tegart_law():
+    """AA6063 (reference section 4) against sigma = asinh((Z/A)^(1/n))/alpha_s at 450 C: 25.62 MPa at
+    1/s (the power-law fit of demos/aluminium_rod.toml gives 25.6); (2.10) and the temperature
+    checked by key; the Gauss-Legendre potential against an adaptive quadrature of sigma."""
+    import dolfinx.fem
+    import dolfinx.mesh
+    import ufl
+    from mpi4py import MPI
+    from scipy.integrate import quad
+
+    from forming_fenicsx.scene import scene_from_dict
+
+    def scene(material, **more):
+        return scene_from_dict({"process": {"kind": "extrusion"}, "units": {
+            "length": "mm", "time": "s", "stress": "MPa"}, "discretisation": {
+            "averaging": "quadrature"}, "material": material, **more})
+
+    law = scene({"name": "AA6063", "temperature": 723.15}).material
+    for rate in (0.01, 1.0, 100.0):
+        z = rate * math.exp(141550.0 / (8.314 * 723.15))
+        exact = math.asinh((z / math.exp(22.5)) ** (1 / 5.385)) / 0.040
+        assert law.flow_stress([rate])[0] == pytest.approx(exact, rel=1e-12)
+    assert law.flow_stress([1.0])[0] == pytest.approx(25.62, abs=0.01)
+    assert law.flow_stress([1.0], temperature=773.15)[0] < law.flow_stress([1.0])[0]  # hotter, softer
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 1, 1)
+    for rate in (1e-7, 0.3, 30.0):
+        value = MPI.COMM_WORLD.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(
+            law.potential_ufl(dolfinx.fem.Constant(mesh, rate)) * ufl.dx(domain=mesh))))
+        floor = law.rate_floor
+        exact = (law.flow_stress([floor])[0] * min(rate, floor) ** 2 / (2 * floor)
+                 + (quad(lambda s: law.flow_stress([s])[0], floor, rate, limit=200)[0]
+                    if rate > floor else 0.0))
+        assert value == pytest.approx(exact, rel=2e-4)  # measured 6.8e-5 at 30/s (8 points)
+    for material, key in [({"law": "sellars_tegart", "alpha_s": 0.04, "n": 0.8, "Q": 1e5, "A": 1e9,
+                            "temperature": 700.0}, "material.n"),
+                          ({"name": "AA6063"}, "material.temperature")]:
+        with pytest.raises(SceneError) as error:
+            scene(material)
+        assert error.value.key == key
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "extrusion"}, "units": {"stress": "MPa", "time": "min"},
+                         "material": {"name": "AA6063", "temperature": 700.0}})
+    assert error.value.key == "material.name"
+    with pytest.raises(SceneError) as error:
+        scene({"name": "AA6063", "temperature": 700.0}, thermal={
+            "heat_capacity": 2.98, "conductivity": 201.0, "inflow_temperature": 723.15})
+    assert error.value.key == "material.temperature"

@@ -16,6 +16,7 @@ from petsc4py import PETSc
 
 from . import contact, friction, strain_profile, thermal
 from .boundary_filter import BoundaryFilter
+from .compat import function_space
 from .coordinates import CoordinateSystem
 from .fields import FlowFields
 from .frozen import FrozenCoefficient, FrozenVelocity
@@ -115,8 +116,15 @@ class FlowProblem:
                 self.strain_field.eps.interpolate(inflow)
             self.frozen.append(self.strain_field)
             self.strain = self.strain_field.eps
+        # the temperature a flow law reads (the [thermal] field, thermal.py, frozen with the
+        # strain); none when the law does not read it or the scene has no [thermal]
+        self.temperature = None
+        if scene.material.heats and scene.thermal is not None:
+            self.temperature = dolfinx.fem.Function(function_space(mesh, "P", disc.degree),
+                                                    name="temperature")
+            self.temperature.x.array[:] = scene.thermal.inflow_temperature
         self.state = SecantState(self.V, self.coordinates, scene.material, disc.averaging,
-                                 self.full_degree, self.strain)
+                                 self.full_degree, self.strain, self.temperature)
         self.u_state = self.state.u
 
         self.has_contact = "gamma3_contact" in self.roles
@@ -161,11 +169,13 @@ class FlowProblem:
         if load is not None:
             residual -= load
         self.residual = split_form(residual, self._apart_degree)
-        # the temperature of a scene with [thermal] (thermal.py): taken from the converged flow
-        # (one way: no flow law reads it yet)
+        # the temperature of a scene with [thermal] (thermal.py): coupled when the flow law reads it,
+        # else taken from the converged flow (one way)
         self.temperature_field = None
         if scene.thermal is not None:
-            self.temperature_field = thermal.scene_temperature_field(self)
+            self.temperature_field = thermal.scene_temperature_field(self, temperature=self.temperature)
+            if self.temperature is not None:  # two way: T joins the frozen coefficients
+                self.frozen.append(self.temperature_field)
 
     # -- kinematics of the scene's coordinate system --------------------------------------------
     def strain_rate(self, u):
@@ -204,7 +214,7 @@ class FlowProblem:
     def flow_stress(self, u):
         """sigma_p(rate(u)) of the material law, a UFL expression."""
         rate = self.equivalent_strain_rate(u)
-        return self.scene.material.secant_ufl(rate, self.strain) * rate
+        return self.scene.material.secant_ufl(rate, self.strain, self.temperature) * rate
 
     def after_solve(self) -> None:
         """Velocity (and pressure) from the solution of a linear system."""
@@ -315,10 +325,12 @@ class FlowProblem:
         return max((coefficient.change(u) for coefficient in self.frozen), default=0.0)
 
     def coupled_settled(self, u: dolfinx.fem.Function, tolerance: float) -> bool:
-        """Whether the coupled fields (the transported strain) would change by less than
+        """Whether the coupled fields (the transported strain, the temperature a flow law reads)
+        would change by less than
         ``tolerance`` when frozen at u: an iteration whose velocity increment is below delta has
         not converged while they still move (the velocity is insensitive to some of their modes)."""
-        return self.strain_field is None or self.strain_field.change(u) < tolerance
+        coupled = [self.strain_field] + ([self.temperature_field] if self.temperature is not None else [])
+        return all(field.change(u) < tolerance for field in coupled if field is not None)
 
     def contact_settled(self, increment: float) -> bool:
         """After an iterate taken in full: the augmented contact's multiplier update

@@ -32,6 +32,7 @@ class PiecewisePowerLaw:
     rate2: float = 1e3
     law: str = "piecewise_power"
     hardens: ClassVar[bool] = False
+    heats: ClassVar[bool] = False  # reads the temperature
 
     def check(self, section: str = "material") -> None:
         """Reject parameters that break (2.10)."""
@@ -64,13 +65,13 @@ class PiecewisePowerLaw:
         """The rate below which the secant is constant (rate1 of (4.5))."""
         return self.rate1
 
-    def secant_ufl(self, rate, strain=None):
+    def secant_ufl(self, rate, strain=None, temperature=None):
         """G(rate) of (4.5) as a UFL expression, for evaluation at quadrature points (no strain
         dependence: ``strain`` is accepted as every law's is)."""
         clipped = ufl.min_value(ufl.max_value(rate, self.rate1), self.rate2)
         return self.A * clipped ** (self.alpha - 1.0)
 
-    def potential_ufl(self, rate, strain=None):
+    def potential_ufl(self, rate, strain=None, temperature=None):
         """W(rate) = int_0^rate sigma_p(s) ds of (4.5), whose derivative is sigma_p: the dissipation
         potential minimised by the solution (the energy of the Newton line search)."""
         g1, g2 = self.A * self.rate1 ** (self.alpha - 1.0), self.A * self.rate2 ** (self.alpha - 1.0)
@@ -103,6 +104,7 @@ class PowerLaw:
     rate_floor_relative: float | None = None
     law: str = "rate_power"
     hardens: ClassVar[bool] = False
+    heats: ClassVar[bool] = False
 
     def resolve(self, process_rate: float) -> PowerLaw:
         """The law with its rate floor absolute (and relative to the process strain rate)."""
@@ -127,11 +129,11 @@ class PowerLaw:
         """G(rate) = sigma_p/rate = A*max(rate, rate_floor)**(n-1)."""
         return self.A * np.maximum(np.asarray(rate, dtype=float), self.rate_floor) ** (self.n - 1.0)
 
-    def secant_ufl(self, rate, strain=None):
+    def secant_ufl(self, rate, strain=None, temperature=None):
         """G(rate) as a UFL expression, for evaluation at quadrature points (no strain dependence)."""
         return self.A * ufl.max_value(rate, self.rate_floor) ** (self.n - 1.0)
 
-    def potential_ufl(self, rate, strain=None):
+    def potential_ufl(self, rate, strain=None, temperature=None):
         """W(rate) = int_0^rate sigma_p(s) ds (quadratic below rate_floor)."""
         g = self.A * self.rate_floor ** (self.n - 1.0)
         w1 = g * self.rate_floor**2 / 2
@@ -170,6 +172,7 @@ class _Hardening:
     initial_strain_file: str | None = None
     name: str | None = None
     hardens: ClassVar[bool] = True
+    heats: ClassVar[bool] = False
 
     def resolve(self, process_rate: float):
         """The law with its rate floor absolute (and relative to the process strain rate)."""
@@ -231,14 +234,14 @@ class _Hardening:
         rate = np.maximum(np.asarray(rate, dtype=float), self.rate_floor)
         return self.flow_stress(rate, strain) / rate
 
-    def secant_ufl(self, rate, strain=None):
+    def secant_ufl(self, rate, strain=None, temperature=None):
         """G(rate, strain) as a UFL expression (the strain a UFL expression, e.g. the transported
         field, or the initial strain)."""
         strain = self.initial_strain if strain is None else strain
         floored = ufl.max_value(rate, self.rate_floor)
         return self.hardening(strain, UFL) * self._factor(floored, UFL) / floored
 
-    def potential_ufl(self, rate, strain=None):
+    def potential_ufl(self, rate, strain=None, temperature=None):
         """W(rate) = int_0^rate sigma_p(s, strain) ds at the (frozen) strain: H(strain) times the
         integral of the rate factor, quadratic below the floor."""
         strain = self.initial_strain if strain is None else strain
@@ -263,10 +266,11 @@ class _Hardening:
 
 
 class _UflMath:
-    """The numpy functions _Hardening uses, for UFL expressions."""
+    """The numpy functions the laws use, for UFL expressions."""
 
     exp = staticmethod(ufl.exp)
     log = staticmethod(ufl.ln)
+    sqrt = staticmethod(ufl.sqrt)
     maximum = staticmethod(ufl.max_value)
 
     @staticmethod
@@ -337,14 +341,93 @@ class VoceLaw(_Hardening):
             -lib.maximum(strain, 0.0) / self.scale)
 
 
+R_GAS = 8.314  # J/(mol K)
+POTENTIAL_POINTS = 8  # Gauss-Legendre points of the Sellars-Tegart potential (the line search's merit)
+
+
+@dataclass(frozen=True)
+class SellarsTegartLaw:
+    """Sellars-Tegart (Zener-Hollomon), the hot-working law of reference section 4:
+    sigma_p = (1/alpha_s) asinh((Z/A)^(1/n)), Z = rate exp(Q/(R T)), R = 8.314 J/(mol K), T in kelvin,
+    linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the process
+    strain rate) where (2.10) needs a bounded secant; n >= 1 keeps sigma_p/rate falling. ``alpha_s``
+    in 1/stress, ``A`` in 1/time, ``Q`` in J/mol. The temperature is the scene's [thermal] field
+    (coupled to the flow), or ``temperature``, the workpiece's, isothermal; with [thermal] it is the
+    inflow temperature, for the scene's scales. Its dissipation potential has no closed form: Newton's
+    line search evaluates it by Gauss-Legendre quadrature in ln(rate) (its residual is exact)."""
+
+    alpha_s: float | None = None
+    n: float | None = None
+    Q: float | None = None
+    A: float | None = None
+    temperature: float | None = None
+    rate_floor: float | None = None
+    rate_floor_relative: float | None = None
+    name: str | None = None
+    law: str = "sellars_tegart"
+    hardens: ClassVar[bool] = False
+    heats: ClassVar[bool] = True
+
+    def resolve(self, process_rate: float) -> SellarsTegartLaw:
+        """The law with its rate floor absolute (and relative to the process strain rate)."""
+        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
+        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
+
+    def check(self, section: str = "material") -> None:
+        for key in ("alpha_s", "A", "temperature", "rate_floor"):
+            _check_positive(section, key, getattr(self, key))
+        if not (self.n is not None and self.n >= 1):
+            raise SceneError(f"{section}.n", f"must be >= 1 for (2.10) (sigma_p/rate falling with "
+                             f"the rate); got {self.n}")
+        if not (self.Q is not None and self.Q >= 0):
+            raise SceneError(f"{section}.Q", f"must be a finite number >= 0 (J/mol); got {self.Q}")
+
+    def _sigma(self, rate, temperature, lib):
+        """sigma_p at rate >= rate_floor; asinh(x) = ln(x + sqrt(x^2 + 1))."""
+        x = (rate * lib.exp(self.Q / (R_GAS * temperature)) / self.A) ** (1.0 / self.n)
+        return lib.log(x + lib.sqrt(x * x + 1.0)) / self.alpha_s
+
+    def flow_stress(self, rate: np.ndarray, strain=None, temperature=None) -> np.ndarray:
+        """sigma_p(rate, T) (T the law's ``temperature`` when not given), linear below the floor."""
+        rate = np.asarray(rate, dtype=float)
+        floored = np.maximum(rate, self.rate_floor)
+        value = self._sigma(floored, self.temperature if temperature is None else temperature, np)
+        return value * np.minimum(rate / self.rate_floor, 1.0)
+
+    def secant(self, rate: np.ndarray, strain=None, temperature=None) -> np.ndarray:
+        """G = sigma_p/rate, bounded by its value at the rate floor."""
+        rate = np.maximum(np.asarray(rate, dtype=float), self.rate_floor)
+        return self.flow_stress(rate, temperature=temperature) / rate
+
+    def secant_ufl(self, rate, strain=None, temperature=None):
+        """G(rate, T) as a UFL expression (T a UFL field, or the law's temperature)."""
+        temperature = self.temperature if temperature is None else temperature
+        floored = ufl.max_value(rate, self.rate_floor)
+        return self._sigma(floored, temperature, UFL) / floored
+
+    def potential_ufl(self, rate, strain=None, temperature=None):
+        """W(rate) = int_0^rate sigma_p ds: quadratic below the floor, above it
+        W(f) + ln(rate/f) int_0^1 sigma_p(s) s dt, s = f (rate/f)^t, by Gauss-Legendre."""
+        temperature = self.temperature if temperature is None else temperature
+        f = self.rate_floor
+        at_floor = self._sigma(f, temperature, UFL)
+        upper = ufl.max_value(rate, f)
+        span = ufl.ln(upper / f)
+        nodes, weights = np.polynomial.legendre.leggauss(POTENTIAL_POINTS)
+        integral = sum(0.5 * weight * self._sigma(f * (upper / f) ** t, temperature, UFL)
+                       * f * (upper / f) ** t for t, weight in zip(0.5 * (nodes + 1), weights))
+        return ufl.conditional(ufl.lt(rate, f), at_floor / f * rate**2 / 2,
+                               at_floor * f / 2 + span * integral)
+
+
 def _check_positive(section: str, key: str, value: float | None) -> None:
     if not (value is not None and value > 0):
         raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {value}")
 
 
 LAWS = {"piecewise_power": PiecewisePowerLaw, "rate_power": PowerLaw, "hollomon": HollomonLaw,
-        "swift": SwiftLaw, "voce": VoceLaw}
-FlowLaw = PiecewisePowerLaw | PowerLaw | HollomonLaw | SwiftLaw | VoceLaw
+        "swift": SwiftLaw, "voce": VoceLaw, "sellars_tegart": SellarsTegartLaw}
+FlowLaw = PiecewisePowerLaw | PowerLaw | HollomonLaw | SwiftLaw | VoceLaw | SellarsTegartLaw
 
 
 # Named materials a scene cites by ``material.name`` (values in MPa; any key overrides)
@@ -358,3 +441,10 @@ MATERIALS: dict[str, dict] = {
 }
 MATERIAL_SOURCES = {name: "Kalpakjian & Schmid, Manufacturing Engineering and Technology, Table 2.3 "
                     "(room temperature)" for name in MATERIALS}
+# hot working (MPa, 1/s, J/mol): the scene must say units.stress = MPa and units.time = s
+MATERIALS["AA6063"] = {"law": "sellars_tegart", "alpha_s": 0.040, "n": 5.385, "Q": 141550.0,
+                       "A": math.exp(22.5)}
+MATERIALS["AA6060"] = {"law": "sellars_tegart", "alpha_s": 0.035, "n": 4.67, "Q": 161000.0,
+                       "A": 7.6301e10}
+MATERIAL_SOURCES["AA6063"] = "Sheppard, Extrusion of Aluminium Alloys (1999), Table 4.1"
+MATERIAL_SOURCES["AA6060"] = "Verlinden (1993)"

@@ -84,13 +84,13 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
         return ufl.sqrt(2.0 / 3.0 * c.deviatoric_product(e, e) + floor**2)
 
     def stress(w):
-        return (2.0 / 3.0 * material.secant_ufl(rate(w), problem.strain)
+        return (2.0 / 3.0 * material.secant_ufl(rate(w), problem.strain, problem.temperature)
                 * c.deviatoric(c.strain_rate(w)))
 
     def secant_and_coupling(w):
         """G and (G'/G)/rate at w: d tau = 2/3 G e'(dw) + coupling e'(w):e'(dw) 2/3 tau."""
         r = ufl.variable(rate(w))
-        g = material.secant_ufl(r, problem.strain)
+        g = material.secant_ufl(r, problem.strain, problem.temperature)
         return g, ufl.diff(g, r) / g / r
 
     # G and (G'/G)/rate at u, evaluated at the Gauss points once per step (tangent_update, before the
@@ -103,7 +103,7 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     # Phi = int W(rate) + the other terms' energies; the residual takes the flow law's term from its
     # stress, 2/3 G e'(u):e'(v), the exact derivative of int W: a law whose W is a quadrature (no closed
     # form) then moves only the line search's merit, not the answer
-    flow_energy = material.potential_ufl(rate(u), problem.strain) * problem.dx
+    flow_energy = material.potential_ufl(rate(u), problem.strain, problem.temperature) * problem.dx
     others = []  # the energies of the other terms
     operator = (2.0 / 3.0 * g * c.deviatoric_product(e_du, e_v) + coupling * symmetric_coupling) * problem.dx
     if problem.mixed:
@@ -123,7 +123,7 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
                                          friction.SLOW_SLIP * abs(scene.process.velocity), problem.ds_contact)
     if problem.has_force:
         others.append(-ufl.action(problem.load(v), w))
-    residual = 2.0 / 3.0 * material.secant_ufl(rate(u), problem.strain) * c.deviatoric_product(e, e_v) \
+    residual = 2.0 / 3.0 * material.secant_ufl(rate(u), problem.strain, problem.temperature) * c.deviatoric_product(e, e_v) \
         * problem.dx
     energy = flow_energy
     for term in others:
@@ -141,7 +141,7 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     # |s| of the 3-D deviator: in plane strain the held 2x2 tensor's out-of-plane part is -tr; the
     # axisymmetric 3x3 deviator has zero trace
     equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
-    cap = material.secant_ufl(rate(u), problem.strain) * rate(u)
+    cap = material.secant_ufl(rate(u), problem.strain, problem.temperature) * rate(u)
     capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
     points = quadrature_points(problem.mesh, problem.full_degree)
     # a factor that carries the mesh: a Newtonian law's G and G' are constants, which UFL gives no domain

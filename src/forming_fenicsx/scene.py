@@ -697,6 +697,17 @@ class Scene:
         slip regularisation, the power law's rate floor, the mesh size and the mollification length."""
         self.geometry.resolve()
         self.geometry.check()
+        if self.material.heats:  # the law reads T: the [thermal] field, or the law's own
+            if self.thermal is not None:
+                if self.material.temperature is not None:
+                    raise SceneError("material.temperature", "the scene has [thermal]: the flow "
+                                     "reads its temperature field; leave material.temperature out")
+                self.thermal.resolve()
+                self.material = dataclasses.replace(self.material,
+                                                    temperature=self.thermal.inflow_temperature)
+            elif self.material.temperature is None:
+                raise SceneError("material.temperature", f"material.law = {self.material.law!r} "
+                                 "needs the workpiece's temperature (kelvin), or a [thermal] section")
         self.material = self.material.resolve(self.reference_strain_rate)
         self.material.check()
         scales = self.scales
@@ -719,9 +730,10 @@ class Scene:
         if self.solver.method == "newton" and self.discretisation.averaging != "quadrature":
             raise SceneError("solver.method", 'newton differentiates G at the integration points: it needs '
                              f'discretisation.averaging = "quadrature"; got {self.discretisation.averaging!r}')
-        if self.material.hardens and self.discretisation.averaging != "quadrature":
+        coupled = self.material.hardens or (self.material.heats and self.thermal is not None)
+        if coupled and self.discretisation.averaging != "quadrature":
             raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "
-                             'hardens with the strain, which lives at the integration points: it needs '
+                             'reads the strain or temperature at the integration points: it needs '
                              f'"quadrature"; got {self.discretisation.averaging!r}')
         if self.material.hardens and self.material.initial_strain_file is not None:
             check_section(read_strain_profile(self.material.initial_strain_file, "material.initial_strain_file"),
@@ -838,6 +850,9 @@ def _material(table: dict[str, Any], defaults: dict[str, Any], units: dict[str, 
         if units.get("stress") != "MPa":
             raise SceneError("material.name", f"{name} is given in MPa: the scene needs units.stress = "
                              f'"MPa" (got {units.get("stress")!r})')
+        if MATERIALS[name]["law"] == "sellars_tegart" and units.get("time") != "s":
+            raise SceneError("material.name", f"{name}'s A is given in 1/s: the scene needs "
+                             f'units.time = "s" (got {units.get("time")!r})')
         table = {**MATERIALS[name], **table}
     law = table.get("law", PiecewisePowerLaw.law)
     if law == "power":

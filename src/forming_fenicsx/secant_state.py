@@ -18,14 +18,16 @@ class SecantState:
     G > 0 everywhere; Q2 nodal values would not) of the projected equivalent strain rate."""
 
     def __init__(self, space, coordinates: CoordinateSystem, material, averaging: str, degree: int,
-                 strain=None):
+                 strain=None, temperature=None):
         mesh = space.mesh
         self.material = material
         self.u = dolfinx.fem.Function(space)
         rate = coordinates.equivalent_strain_rate(self.u)
         self._uniform = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
-        # the strain (a hardening law's UFL field) only with "quadrature", as the scene checks
-        self._quadrature = material.secant_ufl(rate, strain) if averaging == "quadrature" else None
+        # the strain (a hardening law's UFL field) and the temperature only with "quadrature", as
+        # the scene checks
+        self._quadrature = (material.secant_ufl(rate, strain, temperature) if averaging == "quadrature"
+                            else None)
         if self._quadrature is None:
             averaging_space = (function_space(mesh, "DP", 0) if averaging == "centres"
                                else function_space(mesh, "P", 1))

@@ -52,6 +52,7 @@ from petsc4py import PETSc
 
 from .compat import function_space
 from .coordinates import CoordinateSystem
+from .anderson import AndersonMixing
 from .linear_system import LinearSystem, unchanged
 from .roles import ROLES
 
@@ -126,8 +127,9 @@ class TemperatureField:
     """The steady temperature T (Lagrange of ``degree``) of a velocity field, and the
     frozen-coefficient protocol (frozen.py) that couples it to the flow: ``freeze(u)`` solves the
     heat equation with u (and the source at the current frozen T) and moves T ``relaxation`` of the
-    way to it; ``change(u)`` is ||T(u) - T|| / ||T|| in the weighted L2 norm (temperatures in
-    kelvin, so that the relative change means something).
+    way to it; ``change(u)`` is ||T(u) - T|| / ||T(u) - T_0|| in the weighted L2 norm: relative to
+    the temperature change the flow makes (T_0 the initial temperature; in kelvin a change of T
+    itself would be a few 1e-3 of the rise's size).
 
     ``plastic_power(v, T)``: sigma:rate of the velocity v at the frozen temperature T (flow stress
     times equivalent rate), UFL; beta of ``material`` times it is the heat source.
@@ -138,7 +140,6 @@ class TemperatureField:
     """
 
     name = "temperature"
-    per_solve = True
 
     def __init__(self, u: dolfinx.fem.Function, coordinates: CoordinateSystem, facet_tags,
                  material: ThermalMaterial, inflow_temperature, degree: int,
@@ -146,7 +147,8 @@ class TemperatureField:
                  exchanges: tuple[HeatExchange, ...] = (), friction: FrictionHeat | None = None,
                  fixed: dict[int, float] | None = None, initial_temperature: float | None = None,
                  quadrature_degree: int | None = None, relaxation: float = 0.5,
-                 options: dict | None = None):
+                 options: dict | None = None, temperature: dolfinx.fem.Function | None = None,
+                 anderson_depth: int = 4):
         mesh = u.function_space.mesh
         self.mesh, self.material, self.coordinates = mesh, material, coordinates
         self.exchanges, self.friction = exchanges, friction
@@ -154,7 +156,8 @@ class TemperatureField:
         self.relaxation = relaxation
         self.space = function_space(mesh, "P", degree)
         start = inflow_temperature if initial_temperature is None else initial_temperature
-        self.T = dolfinx.fem.Function(self.space, name="temperature")
+        # the flow's own T when a flow law reads it (forms.py builds it first)
+        self.T = temperature or dolfinx.fem.Function(self.space, name="temperature")
         self.reference_temperature = float(start)  # a number: the inflow's unless given
         self.T.x.array[:] = self.reference_temperature
         self._candidate = dolfinx.fem.Function(self.space)
@@ -198,7 +201,9 @@ class TemperatureField:
             for tag, value in (fixed or {}).items()]
         self._system = LinearSystem(dolfinx.fem.form(a), dolfinx.fem.form(L), mesh.comm, PREFIX,
                                     self.bcs, options)
-        self._norm = dolfinx.fem.form(self._candidate ** 2 * self.dx)
+        self._mixing = AndersonMixing(mesh.comm, self.space.dofmap.index_map.size_local,
+                                      anderson_depth, relaxation)
+        self._norm = dolfinx.fem.form((self._candidate - self.reference_temperature) ** 2 * self.dx)
         self._difference = dolfinx.fem.form((self._candidate - self.T) ** 2 * self.dx)
         self._solved_for: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -218,8 +223,9 @@ class TemperatureField:
         return self._candidate
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
-        candidate = self.solve(u)
-        self.T.x.array[:] += self.relaxation * (candidate.x.array - self.T.x.array)
+        """T moved towards T(u): ``relaxation`` of the way, Anderson-accelerated over the freezes
+        (anderson.py; ``anderson_depth`` 0: the relaxed step alone)."""
+        self.T.x.array[:] = self._mixing.step(self.T.x.array, self.solve(u).x.array)
         self.T.x.scatter_forward()
 
     def settle(self, u: dolfinx.fem.Function) -> None:
@@ -304,13 +310,15 @@ def container_tags(problem):
 
 def scene_temperature_field(problem, plastic_power: FieldExpression | None = None,
                             friction_power: FieldExpression | None = None,
-                            options: dict | None = None) -> TemperatureField:
+                            options: dict | None = None,
+                            temperature: dolfinx.fem.Function | None = None) -> TemperatureField:
     """The TemperatureField of a flow problem whose scene has [thermal] (scene.Thermal): the die
     (Gamma3) and container exchanges, the air on the free surfaces (Gamma2, Gamma4) when air_h > 0,
     friction heat on the contact when the flow has friction, Q_k of the flow's degree.
     ``plastic_power`` defaults to the flow law's sigma(rate(v)) rate(v) (the isothermal law: a
     temperature-dependent law passes its own), ``friction_power`` to c_T |v_T|^2 with the flow's
-    slip coefficient (friction.py)."""
+    slip coefficient (friction.py). ``temperature``: the flow's own T Function when its law reads
+    it (the field then solves into it)."""
     from .friction import tangential
 
     thermal, problem_roles = problem.scene.thermal, problem.roles
@@ -340,4 +348,4 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
                             thermal.inflow_temperature, problem.scene.discretisation.degree,
                             plastic_power=plastic_power or flow_power,
                             exchanges=tuple(e for e in exchanges if e.tags), friction=friction,
-                            options=options)
+                            options=options, temperature=temperature)
