@@ -304,7 +304,7 @@ class NewtonSolver(SecantSolver):
             full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
             if (increment < settings.tolerance and settled
-                    and problem.coupled_settled(problem.u, settings.strain_tolerance) and self._balanced(result)):
+                    and problem.coupled_settled(problem.u, settings.coupling_tolerance) and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         hint = ("; with a nearly rate-independent hardening law in plane strain, Newton's per-step "

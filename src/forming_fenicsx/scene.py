@@ -490,13 +490,14 @@ class Solver:
     after which the run stops as stalled or oscillating. ``force_tolerance`` (0: off, as in the
     paper) also requires the x force balance residual
     to fall below it before the run counts as converged: a small increment is not a small error.
-    ``strain_tolerance`` (a hardening law): the run has converged only when the transported strain
-    would change by less than it (relative, weighted L2) when taken from the last velocity.
+    ``coupling_tolerance`` (a hardening law, or a law reading the [thermal] temperature): the run has
+    converged only when the transported strain (relative, weighted L2) and the temperature (relative
+    to its rise) would change by less than it when taken from the last velocity.
     """
 
     method: str = "modified"
     tolerance: float = 1e-4
-    strain_tolerance: float = 1e-3
+    coupling_tolerance: float = 1e-3
     secant_start: int = 3
     dual_start: float = 0.99
     max_iterations: int = 200
@@ -521,9 +522,9 @@ class Solver:
         for key in ("max_iterations", "max_outer_iterations", "stall_window"):
             if getattr(self, key) < 1:
                 raise SceneError(f"solver.{key}", f"must be an integer >= 1; got {getattr(self, key)}")
-        if not 0 < self.strain_tolerance < 1:
-            raise SceneError("solver.strain_tolerance",
-                             f"must lie in (0, 1) (a relative change); got {self.strain_tolerance}")
+        if not 0 < self.coupling_tolerance < 1:
+            raise SceneError("solver.coupling_tolerance",
+                             f"must lie in (0, 1) (a relative change); got {self.coupling_tolerance}")
         if not 0 <= self.force_tolerance < 1:
             raise SceneError("solver.force_tolerance", f"must lie in [0, 1) (0: off); got {self.force_tolerance}")
         check_positive("solver.reference_strain_rate", self.reference_strain_rate)

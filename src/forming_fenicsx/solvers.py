@@ -430,7 +430,7 @@ class SecantSolver:
                 # with an outer loop, the force balance is checked when that loop converges
                 settled = self._contact_settled(increment, increments)
                 if outer_limit == 1:  # the direct method: the coupled fields froze with every iterate
-                    settled = settled and problem.coupled_settled(problem.u, settings.strain_tolerance)
+                    settled = settled and problem.coupled_settled(problem.u, settings.coupling_tolerance)
                 if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
                     break
             else:
