@@ -91,7 +91,8 @@ def test_profiled_mesh_follows_the_wall(element):
 
 def test_csv_straight_cone_reproduces_the_parametric_die(tmp_path):
     """A CSV polyline through the parametric cone's corners gives the same mesh and the same
-    drawing stress (to 1e-8: the two runs differ by 1.2e-9 on 2 ranks, the iteration's round-off), and the entry and exit sizes come from the file."""
+    drawing stress (to 1e-8: the two runs differ by 1.2e-9 on 2 ranks, the iteration's round-off),
+    and the entry and exit sizes come from the file."""
     parametric = drawing_scene({"die_angle": 10.0, "land_length": 0.1, "die_entry": 1.5})
     corners = [parametric.geometry.profile().start] + [s.end for s in
                                                        parametric.geometry.profile().segments]
