@@ -23,7 +23,7 @@ def resolve_pair(section: str, table: Any, key: str, scale: float, default: floa
     check_positive(f"{name}_relative", relative)
     if absolute is None:
         absolute = (default if relative is None else relative) * scale
-    if not (math.isfinite(scale) and math.isfinite(absolute) and absolute > 0):
+    if not (math.isfinite(scale) and scale > 0 and math.isfinite(absolute) and absolute > 0):
         raise SceneError(name, f"its scale {scale:g} (from the scene's velocity, size and flow stress) makes it "
                          f"{absolute:g}: give {name} or check the material's flow stress and the process data")
     return absolute, absolute / scale
