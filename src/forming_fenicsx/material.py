@@ -160,7 +160,10 @@ class _Hardening:
     ``strain`` is the equivalent strain as a UFL expression (the transported field); left out, H is
     taken at ``initial_strain``, which also gives the scene's reference flow stress. The strain
     flowing in is ``initial_strain``, or a profile across the entry section read from
-    ``initial_strain_file`` (strain_profile.py: a previous pass's exit_strain.csv)."""
+    ``initial_strain_file`` (strain_profile.py: a previous pass's exit_strain.csv). With
+    ``softening`` (1/K) and ``softening_temperature`` (K) the law reads the [thermal] temperature
+    through exp(-softening (T - softening_temperature)), Hensel-Spittel's e^(m1 T) (without
+    [thermal] the factor is 1)."""
 
     rate_factor: str = "none"
     m: float | None = None
@@ -170,9 +173,15 @@ class _Hardening:
     rate_floor_relative: float | None = None
     initial_strain: float = 0.0
     initial_strain_file: str | None = None
+    softening: float | None = None
+    softening_temperature: float | None = None
     name: str | None = None
     hardens: ClassVar[bool] = True
-    heats: ClassVar[bool] = False
+
+    @property
+    def heats(self) -> bool:
+        """Whether the law reads the temperature: with a softening factor."""
+        return self.softening is not None
 
     def resolve(self, process_rate: float):
         """The law with its rate floor absolute (and relative to the process strain rate)."""
@@ -196,6 +205,14 @@ class _Hardening:
         for key in ("reference_rate", "rate_floor"):
             if not (getattr(self, key) is not None and getattr(self, key) > 0):
                 raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {getattr(self, key)}")
+        if (self.softening is None) != (self.softening_temperature is None):
+            raise SceneError(f"{section}.softening", "give softening (1/K) and softening_temperature "
+                             "(K, where the factor is 1) together, or neither")
+        if self.softening is not None:
+            if not self.softening >= 0:
+                raise SceneError(f"{section}.softening", f"must be a finite number >= 0 (1/K); got "
+                                 f"{self.softening}")
+            _check_positive(section, "softening_temperature", self.softening_temperature)
         if not self.initial_strain >= 0:
             raise SceneError(f"{section}.initial_strain",
                              f"must be a finite number >= 0; got {self.initial_strain}")
@@ -205,6 +222,13 @@ class _Hardening:
                                  f"as {section}.initial_strain_file (a profile), not both")
             read_strain_profile(self.initial_strain_file, f"{section}.initial_strain_file")
         self._check_curve(section)
+
+    def _thermal(self, temperature, lib):
+        """The softening factor exp(-softening (T - softening_temperature)) (Hensel-Spittel's
+        e^(m1 T)); 1 without softening or without a temperature."""
+        if self.softening is None or temperature is None:
+            return 1.0
+        return lib.exp(-self.softening * (temperature - self.softening_temperature))
 
     @property
     def _exponent(self) -> float:
@@ -224,22 +248,26 @@ class _Hardening:
         floored = np.maximum(rate, self.rate_floor)
         return self._factor(floored, np) * np.minimum(rate / self.rate_floor, 1.0)
 
-    def flow_stress(self, rate: np.ndarray, strain: np.ndarray | float | None = None) -> np.ndarray:
-        """sigma_p(rate, strain), the strain ``initial_strain`` when not given."""
+    def flow_stress(self, rate: np.ndarray, strain: np.ndarray | float | None = None,
+                    temperature=None) -> np.ndarray:
+        """sigma_p(rate, strain[, T]), the strain ``initial_strain`` when not given."""
         strain = self.initial_strain if strain is None else strain
-        return self.hardening(np.asarray(strain, dtype=float), np) * self.rate_factor_value(rate)
+        return (self.hardening(np.asarray(strain, dtype=float), np) * self.rate_factor_value(rate)
+                * self._thermal(temperature, np))
 
-    def secant(self, rate: np.ndarray, strain: np.ndarray | float | None = None) -> np.ndarray:
+    def secant(self, rate: np.ndarray, strain: np.ndarray | float | None = None,
+               temperature=None) -> np.ndarray:
         """G = sigma_p/rate, bounded by its value at the rate floor."""
         rate = np.maximum(np.asarray(rate, dtype=float), self.rate_floor)
-        return self.flow_stress(rate, strain) / rate
+        return self.flow_stress(rate, strain, temperature) / rate
 
     def secant_ufl(self, rate, strain=None, temperature=None):
-        """G(rate, strain) as a UFL expression (the strain a UFL expression, e.g. the transported
-        field, or the initial strain)."""
+        """G(rate, strain[, T]) as a UFL expression (the strain a UFL expression, e.g. the
+        transported field, or the initial strain; T the [thermal] field when the law softens)."""
         strain = self.initial_strain if strain is None else strain
         floored = ufl.max_value(rate, self.rate_floor)
-        return self.hardening(strain, UFL) * self._factor(floored, UFL) / floored
+        return (self.hardening(strain, UFL) * self._factor(floored, UFL) / floored
+                * self._thermal(temperature, UFL))
 
     def potential_ufl(self, rate, strain=None, temperature=None):
         """W(rate) = int_0^rate sigma_p(s, strain) ds at the (frozen) strain: H(strain) times the
@@ -261,8 +289,8 @@ class _Hardening:
                                            - f * math.log(f / ref) + f)
         else:
             upper = power_integral(f, rate)
-        return self.hardening(strain, UFL) * ufl.conditional(ufl.lt(rate, f), below,
-                                                                at_floor + upper)
+        return self.hardening(strain, UFL) * self._thermal(temperature, UFL) * ufl.conditional(
+            ufl.lt(rate, f), below, at_floor + upper)
 
 
 class _UflMath:

@@ -698,7 +698,7 @@ class Scene:
         slip regularisation, the power law's rate floor, the mesh size and the mollification length."""
         self.geometry.resolve()
         self.geometry.check()
-        if self.material.heats:  # the law reads T: the [thermal] field, or the law's own
+        if self.material.law == "sellars_tegart":  # T: the [thermal] field, or the law's own
             if self.thermal is not None:
                 if self.material.temperature is not None:
                     raise SceneError("material.temperature", "the scene has [thermal]: the flow "
