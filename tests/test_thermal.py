@@ -172,21 +172,22 @@ def test_hot_rod_run_writes_its_temperature(shared_tmp):
     """demos/aluminium_rod_hot.toml through `forming run`'s pipeline: the temperature of the
     converged flow (one way), its exit profile and balance. The product leaves between the billet's
     450 C and the adiabatic 450 C + beta p / (rho c) (the container at 420 C takes heat); the energy
-    balance closes to 1e-3 (measured 1.7e-4 on the default mesh)."""
+    balance closes to 2e-3 (measured 6e-4 on the default mesh; this test's coarse one, h = 4 mm)."""
     import json
 
     from forming_fenicsx.run import run_scene
     from forming_fenicsx.scene import load_scene
 
     demos = Path(__file__).resolve().parents[1] / "demos"
-    scene = load_scene(demos / "aluminium_rod_hot.toml", ["output.figures=false"])
+    scene = load_scene(demos / "aluminium_rod_hot.toml", ["output.figures=false",
+                                                          "discretisation.mesh_size=4"])
     summary = run_scene(scene, shared_tmp / "hot_rod")
     inflow = scene.thermal.inflow_temperature
     adiabatic = inflow + 0.9 * summary["ram_pressure"] / 2.98
     assert summary["converged"]
     for key in ("min_exit_temperature", "mean_exit_temperature", "max_exit_temperature"):
         assert inflow < summary[key] < adiabatic, key
-    assert abs(summary["energy_balance_residual"]) < 1e-3
+    assert abs(summary["energy_balance_residual"]) < 2e-3
     assert summary["units"]["quantities"]["mean_exit_temperature"] == "K"
     written = json.loads((shared_tmp / "hot_rod" / "summary.json").read_text())
     assert written["energy_balance"]["process_power"] == pytest.approx(
@@ -199,12 +200,13 @@ def test_hot_rod_run_writes_its_temperature(shared_tmp):
 def test_hot_extrusion_softens_as_it_heats():
     """demos/aluminium_rod_hot.toml with insulated tools (the heat of deformation stays in the
     billet): the Sellars-Tegart flow stress read at the coupled temperature, against the isothermal
-    run at the billet's 450 C (the same scene without [thermal]). Measured: 106.19 against 115.77
-    MPa, the product 29.4 K hotter (below beta p / (rho c) = 32.1 K: a share of the friction heat
-    goes to the die), 14 Newton solves against 11 (the issue allows 3 times)."""
+    run at the billet's 450 C (the same scene without [thermal]), on a coarse mesh (h = 4 mm).
+    Measured: 112.75 against 123.27 MPa (on the demo's 2 mm mesh 106.19 against 115.77), the product
+    30.8 K hotter (below beta p / (rho c) = 34.1 K: a share of the friction heat goes to the die),
+    14 Newton solves against 12 (the issue allows 3 times)."""
     demos = Path(__file__).resolve().parents[1] / "demos"
     insulated = ["thermal.die_h=0", "thermal.container_h=0", "thermal.air_h=0",
-                 "output.fields=false", "output.figures=false"]
+                 "output.fields=false", "output.figures=false", "discretisation.mesh_size=4"]
     data = read_scene_data(demos / "aluminium_rod_hot.toml", insulated)
     hot = solve_scene(scene_from_dict(data))[2]
     data.pop("thermal")
