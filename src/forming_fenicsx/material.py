@@ -419,7 +419,8 @@ class SellarsTegartLaw:
         """sigma_p(rate, T) (T the law's ``temperature`` when not given), linear below the floor."""
         rate = np.asarray(rate, dtype=float)
         floored = np.maximum(rate, self.rate_floor)
-        value = self._sigma(floored, self.temperature if temperature is None else temperature, np)
+        with np.errstate(over="ignore"):  # an infinite stress: the scene check names the law
+            value = self._sigma(floored, self.temperature if temperature is None else temperature, np)
         return value * np.minimum(rate / self.rate_floor, 1.0)
 
     def secant(self, rate: np.ndarray, strain=None, temperature=None) -> np.ndarray:
