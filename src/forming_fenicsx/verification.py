@@ -154,7 +154,8 @@ def radial_hardening_stress_rise(symmetry: str, law, points: int = 200) -> float
 
 
 def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
-                comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None) -> dict[str, float]:
+                comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
+                tolerance: float = 1e-8) -> dict[str, float]:
     """Drawing through the smooth cone or wedge: the exit cap pulled at the exact velocity, the entry
     cap free (the exact sigma_rr is taken zero there), the wall a frictionless die, the Norton law
     sigma = K rate^n (or the scene ``material`` given, e.g. a hardening law, whose strain is then
@@ -174,7 +175,7 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
         "material": material or {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "averaging": "quadrature"},
         "penalty": {"d_relative": 1e-7, "d_N_relative": 1e-4},  # O(d) below Q2's error on 16 cells
-        "solver": {"method": method, "tolerance": 1e-8, "max_iterations": 300,
+        "solver": {"method": method, "tolerance": tolerance, "max_iterations": 300,
                    "reference_strain_rate": 2.0}})
     problem = FlowProblem(scene, forming_mesh)
     exit_velocity = dolfinx.fem.Function(problem.V)
