@@ -29,7 +29,7 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import function_space
+from forming_fenicsx.compat import atan2, function_space
 from forming_fenicsx.coordinates import CoordinateSystem
 from forming_fenicsx.strain_transport import StrainField
 from forming_fenicsx.verification import RADIAL, radial_velocity, sector_mesh
@@ -111,7 +111,7 @@ def radial_case(symmetry: str, cells: int, degree: int, velocity_degree: int,
     if stepped:
         case.step = dolfinx.fem.Constant(mesh, 0.5)
         angle = np.radians(RADIAL["alpha"]) * case.step
-        case.stepped = ufl.conditional(ufl.gt(ufl.atan_2(x[1], -x[0]), angle), 1.0, 0.0)
+        case.stepped = ufl.conditional(ufl.gt(atan2(x[1], -x[0]), angle), 1.0, 0.0)
     return case
 
 

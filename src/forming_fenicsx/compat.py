@@ -8,6 +8,7 @@ import numpy as np
 import dolfinx
 import dolfinx.fem
 import dolfinx.mesh
+import ufl
 from petsc4py import PETSc
 
 DOLFINX_VERSION = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
@@ -131,3 +132,8 @@ def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
     hit = offsets[1:] > offsets[:-1]
     cells[hit] = np.asarray(colliding.array)[offsets[:-1][hit]]  # the first colliding cell of each
     return cells
+
+
+def atan2(y, x):
+    """UFL's two-argument arctangent: ufl.atan_2 in UFL 2022 (Debian 12), ufl.atan2 in 2024."""
+    return (ufl.atan2 if hasattr(ufl, "atan2") else ufl.atan_2)(y, x)
