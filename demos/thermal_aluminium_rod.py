@@ -3,7 +3,7 @@
 #     python demos/thermal_aluminium_rod.py [output.png [conductivity]]
 #
 # demos/aluminium_rod.toml with a [thermal] section (scene.Thermal), its flow solved, then the
-# steady temperature of that flow (thermal.scene_temperature_field), one way: the rate power law
+# steady temperature of that flow (the problem's temperature field), one way: the rate power law
 # does not read T. AA6063: rho c = 2800 kg/m^3 x 1064 J/(kg K) = 2.98 MPa/K, kappa = 201 W/(m K)
 # = 201 N/(s K), beta = 0.9; billet in at 450 C; die at 450 C with h = 20 kW/(m^2 K)
 # = 20 N/(mm s K); container at 420 C with h = 5; air at 20 C on the rod, h = 10 W/(m^2 K) = 0.01;
@@ -23,7 +23,7 @@ from mpi4py import MPI
 from forming_fenicsx.compat import function_space
 from forming_fenicsx.run import solve_scene
 from forming_fenicsx.scene import read_scene_data, scene_from_dict
-from forming_fenicsx.thermal import ThermalMaterial, effusivity_share, scene_temperature_field
+from forming_fenicsx.thermal import ThermalMaterial, effusivity_share
 
 KELVIN = 273.15
 conductivity = float(sys.argv[2]) if len(sys.argv) > 2 else 201.0
@@ -35,8 +35,7 @@ data["thermal"] = {"heat_capacity": 2.98, "conductivity": conductivity, "heat_fr
                    "air_temperature": 20 + KELVIN, "friction_share": share}
 scene = scene_from_dict(data)
 problem, result, summary = solve_scene(scene)
-field = scene_temperature_field(problem)
-field.settle(problem.u)  # one way: T of the final flow
+field = problem.temperature_field  # T of the final flow, one way (solve_scene settled it)
 ram_power = summary["ram_force"] * scene.process.velocity
 balance = field.energy_balance(ram_power)
 leaving = ufl.dot(field.velocity, field.n)

@@ -325,12 +325,12 @@ class FlowProblem:
         return max((coefficient.change(u) for coefficient in self.frozen), default=0.0)
 
     def coupled_settled(self, u: dolfinx.fem.Function, tolerance: float) -> bool:
-        """Whether the coupled fields (the transported strain, the temperature a flow law reads)
-        would change by less than
+        """Whether the coupled fields (the frozen coefficients but the friction bound: the
+        transported strain, the temperature a flow law reads) would change by less than
         ``tolerance`` when frozen at u: an iteration whose velocity increment is below delta has
         not converged while they still move (the velocity is insensitive to some of their modes)."""
-        coupled = [self.strain_field] + ([self.temperature_field] if self.temperature is not None else [])
-        return all(field.change(u) < tolerance for field in coupled if field is not None)
+        return all(field.change(u) < tolerance for field in self.frozen
+                   if field is not self.friction_state)
 
     def contact_settled(self, increment: float) -> bool:
         """After an iterate taken in full: the augmented contact's multiplier update

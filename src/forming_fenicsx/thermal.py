@@ -153,7 +153,6 @@ class TemperatureField:
         self.mesh, self.material, self.coordinates = mesh, material, coordinates
         self.exchanges, self.friction = exchanges, friction
         self.inflow_temperature = inflow_temperature
-        self.relaxation = relaxation
         self.space = function_space(mesh, "P", degree)
         start = inflow_temperature if initial_temperature is None else initial_temperature
         # the flow's own T when a flow law reads it (forms.py builds it first)
