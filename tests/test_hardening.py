@@ -33,16 +33,16 @@ def test_exact_stress_rise_is_the_strain_integral():
 @pytest.mark.parametrize("law", sorted(LAWS))
 def test_cone_with_hardening(law):
     """Q2, 8 cells, Newton with the strain coupled at every step: exit stress within 0.2 % (measured
-    0.084 %, 0.052 %, 0.044 % for Hollomon, Swift, Voce), the mean exit strain to 1e-4."""
+    0.079 %, 0.050 %, 0.044 % for Hollomon, Swift, Voce), the mean exit strain to 1e-4."""
     run = radial_flow("axisymmetric", 0.0, "Q2", 8, material=LAWS[law])
     assert run["exit_stress"] == pytest.approx(run["exact_exit_stress"], rel=2e-3)
     assert run["exit_strain"] == pytest.approx(run["exact_exit_strain"], abs=1e-4)
-    assert run["linear_solves"] <= 40  # measured 32, 33, 20
+    assert run["linear_solves"] <= 32  # measured 26, 22, 22 (Anderson throughout: 32, 33, 20)
 
 
 def test_cone_hardening_converges_under_refinement():
-    """Hollomon through the cone on Q1: the exit stress error falls with the mesh (measured 0.265 %,
-    0.139 %, 0.074 % on 4, 8, 16 cells: order 0.9) and the exit strain error too (order 1.0 to 1.6)."""
+    """Hollomon through the cone on Q1: the exit stress error falls with the mesh (measured 0.259 %,
+    0.134 %, 0.069 % on 4, 8, 16 cells: order 0.95) and the exit strain error too (order 1.0 to 1.6)."""
     runs = [radial_flow("axisymmetric", 0.0, "Q1", cells, material=LAWS["hollomon"])
             for cells in (4, 8, 16)]
     stress = [abs(r["exit_stress"] / r["exact_exit_stress"] - 1) for r in runs]
@@ -58,11 +58,13 @@ def test_cone_hardening_converges_under_refinement():
 def test_wedge_with_hardening(law):
     """Plane strain, Q2, 4 cells, the direct method (Newton does not converge on the nearly
     rate-independent wedge with hardening, docs/hardening.md), to delta = 1e-7: exit stress within
-    0.1 % (measured 1.5e-4, 1.4e-4, 2.8e-4 at delta 1e-8) and the exit strain to 1e-6."""
+    0.1 % (measured 1.5e-4, 1.4e-4, 2.8e-4 in 48, 40, 32 solves; 236, 153, 223 with Anderson depth
+    4 in place of the relaxed step) and the exit strain to 1e-6."""
     run = radial_flow("plane_strain", 0.0, "Q2", 4, method="direct", material=LAWS[law],
                       tolerance=1e-7)
     assert run["exit_stress"] == pytest.approx(run["exact_exit_stress"], rel=1e-3)
     assert run["exit_strain"] == pytest.approx(run["exact_exit_strain"], abs=1e-6)
+    assert run["linear_solves"] <= 80  # the relaxed coupling; Anderson took 236, 153, 223
 
 
 def test_strain_profile_file_is_checked(tmp_path):

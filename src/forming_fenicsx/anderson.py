@@ -28,10 +28,6 @@ class AndersonMixing:
         self._dF: list[np.ndarray] = []
         self._dX: list[np.ndarray] = []
 
-    def reset(self) -> None:
-        """Forget the history (the next step is the plain iteration)."""
-        self._previous, self._dF, self._dX = None, [], []
-
     def step(self, x: np.ndarray, g: np.ndarray) -> np.ndarray:
         """x_{k+1} from x_k and g(x_k) (local arrays whose first ``owned`` entries are owned; the
         returned array has the owned entries set, the ghosts to be updated by the caller)."""

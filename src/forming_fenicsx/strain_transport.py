@@ -40,6 +40,9 @@ from .coordinates import CoordinateSystem
 from .linear_system import LinearSystem, unchanged
 
 PREFIX = "strain"
+# the strain change below which the coupling switches from the relaxed step to Anderson
+# acceleration (docs/hardening.md: 3e-3 and 1e-2 measured, 3e-3 a few solves cheaper)
+ANDERSON_FROM = 3e-3
 
 
 class StrainField:
@@ -53,7 +56,7 @@ class StrainField:
     def __init__(self, u: dolfinx.fem.Function, coordinates: CoordinateSystem, inflow_strain,
                  degree: int, quadrature_degree: int, scheme: str = "supg",
                  options: dict | None = None, anderson_depth: int = 4,
-                 anderson_damping: float = 1.0):
+                 relaxation: float = 0.5, anderson_from: float = ANDERSON_FROM):
         mesh = u.function_space.mesh
         self.space = function_space(mesh, "P" if scheme == "supg" else "DP", degree)
         self.eps = dolfinx.fem.Function(self.space, name="equivalent_strain")
@@ -95,9 +98,11 @@ class StrainField:
         self._norm = dolfinx.fem.form(self._candidate ** 2 * dx)
         self._difference = dolfinx.fem.form((self._candidate - self.eps) ** 2 * dx)
         self._solved_for: tuple[np.ndarray] | None = None
-        self._mixing = AndersonMixing(mesh.comm, self.space.dofmap.index_map.size_local
-                                      * self.space.dofmap.index_map_bs, anderson_depth,
-                                      anderson_damping)
+        owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
+        self._relaxed = AndersonMixing(mesh.comm, owned, 0, relaxation)
+        self._anderson = AndersonMixing(mesh.comm, owned, anderson_depth)
+        self._anderson_from = anderson_from
+        self._mixing = self._relaxed
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
         """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
@@ -119,11 +124,20 @@ class StrainField:
         return self._candidate
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
-        """eps from the strain of u, Anderson-accelerated over the freezes (anderson.py)."""
-        self.eps.x.array[:] = self._mixing.step(self.eps.x.array, self.solve(u).x.array)
+        """eps <- eps + relaxation (eps(u) - eps) until the change falls below ``anderson_from``,
+        then Anderson acceleration (anderson.py, depth ``anderson_depth``) from a fresh history.
+        Far from the answer Newton moves u a lot between freezes, the strains of Anderson's
+        history belong to velocities since left behind, and the relaxed step is cheaper; near it
+        the velocity barely moves but for the strain, and Anderson takes the slow modes the
+        relaxed step crawls along (docs/hardening.md: the couplings measured)."""
+        change = self.change(u)
+        if self._mixing is self._relaxed and 0.0 < change < self._anderson_from:
+            self._mixing = self._anderson
+        self.eps.x.array[:] = self._mixing.step(self.eps.x.array, self._candidate.x.array)
         self.eps.x.scatter_forward()
 
     def change(self, u: dolfinx.fem.Function) -> float:
+        """||eps(u) - eps|| / ||eps(u)|| in the weighted L2 norm (collective)."""
         self.solve(u)
         comm = self.space.mesh.comm
         norm = comm.allreduce(dolfinx.fem.assemble_scalar(self._norm))
