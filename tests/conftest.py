@@ -10,6 +10,31 @@ from mpi4py import MPI
 from forming_fenicsx.scene import Scene, scene_from_dict
 
 
+# The mark `no_parallel_content`: a test whose work does not depend on the number of ranks of the
+# pytest run, because it is pure Python (scene validation, closed forms, the limit-analysis linear
+# programs with scipy: nothing reads MPI.COMM_WORLD or builds a mesh) or because rank 0 launches a
+# child process that is the same in both phases (a serial `forming run`, or the child's own
+# `mpirun -n 2`). Under `mpirun -n 2` such a test would only repeat the serial phase's work on each
+# rank, so the 2-rank phase of scripts/test deselects it (pytest's summary counts it as
+# "deselected"); the serial phase runs it. Never put it on a test that solves, assembles or
+# partitions anything in the pytest process: the 2-rank run is how parallel correctness is tested.
+NO_PARALLEL_CONTENT = "no_parallel_content"
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", f"{NO_PARALLEL_CONTENT}: the same serial work on any number of "
+                            "ranks (pure Python or a child process): run in the serial phase only")
+
+
+def pytest_collection_modifyitems(config, items):
+    if MPI.COMM_WORLD.size == 1:
+        return
+    dropped = [item for item in items if item.get_closest_marker(NO_PARALLEL_CONTENT)]
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = [item for item in items if not item.get_closest_marker(NO_PARALLEL_CONTENT)]
+
+
 @pytest.fixture
 def shared_tmp(tmp_path: Path) -> Path:
     """A temporary folder that every rank sees (rank 0's)."""

@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.bench import compare, median_run, run_case
@@ -19,6 +20,7 @@ def test_run_case_in_process_gives_a_full_row():
     assert row["exact"] is not None and abs(row["value"] / row["exact"] - 1) < 0.2
 
 
+@pytest.mark.no_parallel_content  # child processes under their own mpirun (tests/conftest.py)
 def test_bench_command_launches_each_case_and_compares(shared_tmp):
     """The parent (outside any MPI job) launches the cases under mpirun and compares them."""
     out = shared_tmp / "bench.json"

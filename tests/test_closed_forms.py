@@ -14,6 +14,8 @@ from forming_fenicsx.closed_forms import (
     strip_optimum_angle, swift_stress_rise, upper_bound_strip_drawing_stress,
     upper_bound_wedge_factor, voce_stress_rise)
 
+pytestmark = pytest.mark.no_parallel_content  # pure Python (tests/conftest.py)
+
 SQRT3 = math.sqrt(3.0)
 
 

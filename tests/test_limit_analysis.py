@@ -7,6 +7,8 @@ import pytest
 from forming_fenicsx.limit_analysis import lower_bound, strip_triangulation, upper_bound
 from forming_fenicsx.scene import DrawingGeometry
 
+pytestmark = pytest.mark.no_parallel_content  # numpy and scipy's linprog (tests/conftest.py)
+
 K = 100.0
 EXACT_EXIT = 1.625 * (1 - 2 * math.sin(math.radians(6)) / (1 + 2 * math.sin(math.radians(6))))
 EXACT_Q = 2 * K * (1 + math.radians(6)) * EXACT_EXIT / 1.625   # Hill's field: 2k(1 + a)(1 - r)

@@ -3,6 +3,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from mpi4py import MPI
 
 from test_run_outputs import DEMO
@@ -25,6 +26,7 @@ sys.exit(main(["run", sys.argv[1], "--out", sys.argv[2], "--quiet", "--set", "di
 """
 
 
+@pytest.mark.no_parallel_content  # the child's own mpirun -n 2 (tests/conftest.py)
 def test_one_rank_failure_ends_all_ranks(shared_tmp):
     out = shared_tmp / "aborted"
     outcome = None

@@ -144,6 +144,7 @@ def test_zero_pivot_stops_with_reason(shared_tmp):
     assert "linear solve failed at outer 0, inner 0" in summary["reason"]
 
 
+@pytest.mark.no_parallel_content  # a serial child process (tests/conftest.py)
 def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user_permissions(shared_tmp):
     """A first run compiles every form (FFCx logs each gcc command through the root logger's handler,
     about 30 lines before the fix): with --quiet a converged run without warnings prints nothing, and

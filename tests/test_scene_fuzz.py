@@ -6,11 +6,14 @@ import math
 import tomllib
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.scene import SECTIONS, key_name, scene_from_dict
+
+pytestmark = pytest.mark.no_parallel_content  # pure Python (tests/conftest.py)
 
 DEMOS = sorted((Path(__file__).parents[1] / "demos").glob("*.toml"))
 BASES = [tomllib.loads(path.read_text()) for path in DEMOS]
