@@ -159,6 +159,12 @@ class NewtonSolver(SecantSolver):
         problem, u = self.problem, petsc_vec(self.problem.solution)
         du = petsc_vec(forms.step)  # the dual update reads it and the previous iterate
         problem.freeze(problem.u)  # tau_f (every frozen coefficient) at u, as in (3.13)
+        if forms.dual_recap is not None:
+            # a strain or temperature just frozen can lower the flow stress below the dual's
+            # |tau_h|; capped again, the operator stays positive definite and -du a descent
+            # direction of Phi (without it, F.du < 0 stopped the line search at 2^-12 on a
+            # plane-strain strip hardening from zero strain, docs/hardening.md)
+            set_at_quadrature_points(forms.dual, forms.dual_recap)
         residual = self.assemble_residual().norm()
         self.assemble_operator()
         law_switches, contact_switches = self.count_switches()

@@ -16,7 +16,8 @@ from .forms import FlowProblem, SplitForm, split_form
 class NewtonForms:
     """What Newton's method needs of a problem (newton_forms): compiled energy and residual
     (SplitForm), and the operator with its UFL form; the dual stress at the Gauss points with the
-    expressions that reset and update it; the operator's material coefficients at the Gauss points (G
+    expressions that reset and update it (and cap it again at the flow stress after the coupled
+    fields move: None without any); the operator's material coefficients at the Gauss points (G
     and (G'/G)/rate at u) with the expression that sets them; the last Newton step du and the iterate
     before it."""
 
@@ -27,6 +28,7 @@ class NewtonForms:
     dual: dolfinx.fem.Function
     dual_reset: dolfinx.fem.Expression
     dual_update: dolfinx.fem.Expression
+    dual_recap: dolfinx.fem.Expression | None
     tangent: dolfinx.fem.Function
     tangent_update: dolfinx.fem.Expression
     step: dolfinx.fem.Function
@@ -140,10 +142,16 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
         - coupling * 2.0 / 3.0 * c.deviatoric_product(e_previous, e_step) * dual
     # |s| of the 3-D deviator: in plane strain the held 2x2 tensor's out-of-plane part is -tr; the
     # axisymmetric 3x3 deviator has zero trace
-    equivalent = ufl.sqrt(1.5 * (ufl.inner(updated, updated) + ufl.tr(updated) ** 2)) + 1e-300
     cap = material.secant_ufl(rate(u), problem.strain, problem.temperature) * rate(u)
-    capped = ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * updated
+
+    def capped(t):
+        """t scaled down to the flow stress of u where its equivalent exceeds it."""
+        equivalent = ufl.sqrt(1.5 * (ufl.inner(t, t) + ufl.tr(t) ** 2)) + 1e-300
+        return ufl.conditional(ufl.gt(equivalent, cap), cap / equivalent, 1.0) * t
+
     points = quadrature_points(problem.mesh, problem.full_degree)
+    # the dual capped again once the coupled fields have moved the flow stress (dual_recap)
+    coupled = problem.strain is not None or problem.temperature is not None
     # a factor that carries the mesh: a Newtonian law's G and G' are constants, which UFL gives no domain
     on_mesh = dolfinx.fem.Constant(problem.mesh, 1.0)
     contact_set = None
@@ -153,7 +161,9 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     apart = problem.measures.apart_degree
     return NewtonForms(split_form(energy, apart), split_form(residual, apart),
                        dolfinx.fem.form(operator), operator, dual,
-                       dolfinx.fem.Expression(stress(u), points), dolfinx.fem.Expression(capped, points),
+                       dolfinx.fem.Expression(stress(u), points),
+                       dolfinx.fem.Expression(capped(updated), points),
+                       dolfinx.fem.Expression(capped(dual), points) if coupled else None,
                        tangent, dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)) * on_mesh, points),
                        step, previous, contact_set)
 
