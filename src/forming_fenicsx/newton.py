@@ -314,7 +314,8 @@ class NewtonSolver(SecantSolver):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
         hint = ("; with a nearly rate-independent hardening law in plane strain, Newton's per-step "
-                "strain update may not settle: try solver.method = \"direct\" or a rate factor"
+                "strain update may not settle: try solver.method = \"direct\", a rate factor, or "
+                "a hardening curve of finite initial slope (voce; swift with a prestrain)"
                 if problem.strain_field is not None else "")
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
                          f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})"
