@@ -18,6 +18,9 @@ from forming_fenicsx.run import solve_scene
 
 DEMO = str(Path(__file__).parents[1] / "demos" / "example1_extrusion.toml")
 COARSE = ["--set", "discretisation.mesh_size=1.0", "--quiet"]
+# For the runs whose test reads neither fields.xdmf nor a figure (the figures took 0.95 s of each
+# run on this mesh); test_run_writes_summary_history_fields_and_figures checks both
+NO_FIELDS_NO_FIGURES = ["--set", "output.fields=false", "--set", "output.figures=false"]
 REQUIRED = {"scene", "dolfinx_version", "mpi_ranks", "dofs", "converged", "linear_solves", "outer_iterations",
             "wall_time_s", "ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "force_balance_residual"}
 
@@ -66,7 +69,7 @@ def test_existing_output_is_kept_without_force_and_replaced_with_it(shared_tmp, 
     assert (out / "mine.txt").read_text() == "keep me"
     if MPI.COMM_WORLD.rank == 0:
         assert "--force" in capsys.readouterr().err
-    assert main(["run", DEMO, "--out", str(out), *COARSE, "--force", "--set", "output.fields=false"]) == 0
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--force", *NO_FIELDS_NO_FIGURES]) == 0
     MPI.COMM_WORLD.barrier()
     assert not (out / "mine.txt").exists() and (out / "summary.json").exists()
     assert not [p for p in shared_tmp.iterdir() if ".partial-" in p.name]  # no staging folder left
@@ -112,8 +115,8 @@ def test_sigterm_ends_the_run_cleanly_with_the_last_iterate(shared_tmp):
 
 def test_restart_from_a_previous_run(shared_tmp, capsys):
     first, second = shared_tmp / "first", shared_tmp / "second"
-    assert main(["run", DEMO, "--out", str(first), *COARSE, "--set", "output.fields=false"]) == 0
-    assert main(["run", DEMO, "--out", str(second), *COARSE, "--set", "output.fields=false",
+    assert main(["run", DEMO, "--out", str(first), *COARSE, *NO_FIELDS_NO_FIGURES]) == 0
+    assert main(["run", DEMO, "--out", str(second), *COARSE, *NO_FIELDS_NO_FIGURES,
                  "--restart", str(first)]) == 0
     MPI.COMM_WORLD.barrier()
     a = json.loads((first / "summary.json").read_text())
