@@ -130,10 +130,11 @@ class StrainField:
         history belong to velocities since left behind, and the relaxed step is cheaper; near it
         the velocity barely moves but for the strain, and Anderson takes the slow modes the
         relaxed step crawls along (docs/hardening.md: the couplings measured)."""
-        change = self.change(u)
-        if self._mixing is self._relaxed and 0.0 < change < self._anderson_from:
-            self._mixing = self._anderson
-        self.eps.x.array[:] = self._mixing.step(self.eps.x.array, self._candidate.x.array)
+        if self._mixing is self._relaxed and self._anderson_from > 0.0:
+            # the change only while the switch can still happen (it also solves for u)
+            if 0.0 < self.change(u) < self._anderson_from:
+                self._mixing = self._anderson
+        self.eps.x.array[:] = self._mixing.step(self.eps.x.array, self.solve(u).x.array)
         self.eps.x.scatter_forward()
 
     def change(self, u: dolfinx.fem.Function) -> float:
