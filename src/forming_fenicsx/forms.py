@@ -20,7 +20,7 @@ from .compat import function_space
 from .coordinates import CoordinateSystem
 from .fields import FlowFields
 from .frozen import FrozenCoefficient, FrozenVelocity
-from .strain_transport import ANDERSON_FROM, StrainField
+from .strain_transport import TANGENT_FROM, StrainField
 from .geometry import FormingMesh
 from .measures import Measures
 from .roles import ROLES
@@ -108,12 +108,11 @@ class FlowProblem:
                     mesh, disc.degree, strain_profile.read_strain_profile(
                         scene.material.initial_strain_file, "material.initial_strain_file"),
                     scene.geometry.entry_thickness / 2)
-            # Anderson's tail for Newton only: the secant methods' iterates are not converged for
-            # the frozen strain, and Anderson there took 127 to 214 direct iterates against 32 to 48
-            # with the relaxed step alone (the wedge of docs/hardening.md)
+            # the relaxed step alone for the secant methods, then the strain in the tangent for
+            # Newton (strain_tangent.py): a secant iterate is not converged for the frozen strain
             self.strain_field = StrainField(
                 self.u, self.coordinates, inflow, disc.degree, self.full_degree,
-                anderson_from=ANDERSON_FROM if scene.solver.method == "newton" else 0.0)
+                tangent_from=TANGENT_FROM if scene.solver.method == "newton" else 0.0)
             if isinstance(inflow, float):
                 self.strain_field.eps.x.array[:] = inflow
             else:

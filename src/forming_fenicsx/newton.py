@@ -28,6 +28,7 @@ from .compat import petsc_vec, set_at_quadrature_points
 from .errors import LinearSolveError
 from .newton_forms import newton_forms
 from .solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, Timings, log
+from .strain_tangent import StrainTangent
 
 ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
 MAX_HALVINGS = 12   # smallest step 2**-12
@@ -90,9 +91,14 @@ class NewtonSolver(SecantSolver):
             dolfinx.fem.petsc.create_vector(self.forms.contact_set)
         self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
         self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
+        # the strain's derivative in the step once the coupling has settled (strain_tangent.py)
+        self.strain_tangent = StrainTangent(problem, self.forms.residual.ufl) \
+            if problem.strain_field is not None else None
 
     def destroy(self) -> None:
         self.newton.destroy()
+        if self.strain_tangent is not None:
+            self.strain_tangent.destroy()
         self._change.destroy()
         if self._contact_set is not None:
             self._contact_set.destroy()
@@ -177,6 +183,13 @@ class NewtonSolver(SecantSolver):
         result.linear_solves += 1
         self._estimate = lambda: self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)  # relative to u
         solve_error = self.sampled_error(result)
+        coupled = ""
+        if self.strain_tangent is not None and problem.strain_field.in_tangent:
+            error = self._estimate()  # of A's solve, before du moves
+            self._estimate = lambda: error
+            converged = self.strain_tangent.solve(self.newton.A, self.newton.ksp, self.newton.b, du)
+            coupled = f"  strain in the tangent: {self.strain_tangent.iterations} GMRES iterations" \
+                + ("" if converged else " (not converged: the staggered step)")
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms.step.x.scatter_forward()
@@ -193,7 +206,8 @@ class NewtonSolver(SecantSolver):
         result.history.append(record)
         if problem.comm.rank == 0:
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, contact %d  "
-                     "(%.1f s)", inner, increment, residual, step, law_switches, contact_switches, record.elapsed)
+                     "(%.1f s)%s", inner, increment, residual, step, law_switches, contact_switches, record.elapsed,
+                     coupled)
         return increment
 
     def keep_previous(self) -> None:

@@ -35,14 +35,13 @@ import ufl
 from mpi4py import MPI
 
 from .compat import function_space
-from .anderson import AndersonMixing
 from .coordinates import CoordinateSystem
 from .linear_system import LinearSystem, unchanged
 
 PREFIX = "strain"
-# the strain change below which the coupling switches from the relaxed step to Anderson
-# acceleration (docs/hardening.md: 3e-3 and 1e-2 measured, 3e-3 a few solves cheaper)
-ANDERSON_FROM = 3e-3
+# the strain change below which Newton's coupling switches from the relaxed step to the strain in
+# the tangent (docs/hardening.md: 3e-3, 1e-2 and 3e-2 measured; 3e-2 stopped early or failed)
+TANGENT_FROM = 1e-2
 
 
 class StrainField:
@@ -55,8 +54,7 @@ class StrainField:
 
     def __init__(self, u: dolfinx.fem.Function, coordinates: CoordinateSystem, inflow_strain,
                  degree: int, quadrature_degree: int, scheme: str = "supg",
-                 options: dict | None = None, anderson_depth: int = 4,
-                 relaxation: float = 0.5, anderson_from: float = ANDERSON_FROM):
+                 options: dict | None = None, relaxation: float = 0.5, tangent_from: float = 0.0):
         mesh = u.function_space.mesh
         self.space = function_space(mesh, "P" if scheme == "supg" else "DP", degree)
         self.eps = dolfinx.fem.Function(self.space, name="equivalent_strain")
@@ -91,18 +89,23 @@ class StrainField:
                      + entering["-"] * (eps("-") - eps("+")) * w("-")) * dS
         else:
             raise ValueError(f"scheme must be supg or upwind; got {scheme!r}")
-        self._system = LinearSystem(
-            dolfinx.fem.form(ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps),
-            dolfinx.fem.form(rate * test * dx + inflow * inflow_strain * w * ds), mesh.comm, PREFIX,
-            options=options)
+        bilinear = ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps
+        linear = rate * test * dx + inflow * inflow_strain * w * ds
+        self._system = LinearSystem(dolfinx.fem.form(bilinear), dolfinx.fem.form(linear), mesh.comm,
+                                    PREFIX, options=options)
+        # the transport residual R(eps(u), u) at the last solve, for its velocity derivative
+        self._residual = ufl.replace(bilinear, {eps: self._candidate}) - linear
+        self._dx = dx
         self._norm = dolfinx.fem.form(self._candidate ** 2 * dx)
         self._difference = dolfinx.fem.form((self._candidate - self.eps) ** 2 * dx)
+        # the strain the iteration starts from (the inflow strain everywhere, kept at the first
+        # freeze): the switch to the tangent measures the change against the strain gained
+        self._start: dolfinx.fem.Function | None = None
+        self._gained = None
         self._solved_for: tuple[np.ndarray] | None = None
-        owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
-        self._relaxed = AndersonMixing(mesh.comm, owned, 0, relaxation)
-        self._anderson = AndersonMixing(mesh.comm, owned, anderson_depth)
-        self._anderson_from = anderson_from
-        self._mixing = self._relaxed
+        self._relaxation, self._tangent_from = relaxation, tangent_from
+        # eps = eps(u) at every freeze, and its derivative in Newton's step (strain_tangent.py)
+        self.in_tangent = False
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
         """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
@@ -124,26 +127,51 @@ class StrainField:
         return self._candidate
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
-        """eps <- eps + relaxation (eps(u) - eps) until the change falls below ``anderson_from``,
-        then Anderson acceleration (anderson.py, depth ``anderson_depth``) from a fresh history.
-        Far from the answer Newton moves u a lot between freezes, the strains of Anderson's
-        history belong to velocities since left behind, and the relaxed step is cheaper; near it
-        the velocity barely moves but for the strain, and Anderson takes the slow modes the
-        relaxed step crawls along (docs/hardening.md: the couplings measured)."""
-        if self._mixing is self._relaxed and self._anderson_from > 0.0:
+        """eps <- eps + relaxation (eps(u) - eps); with ``tangent_from`` > 0 (Newton), once the
+        change falls below it, eps <- eps(u) with ``in_tangent`` set: Newton's step then carries
+        the strain's derivative (strain_tangent.py). Far from the answer the full eps(u) of a
+        velocity Newton has not settled overshoots; near it the relaxed step crawls along the slow
+        mode of strain and velocity following each other (docs/hardening.md: the couplings
+        measured)."""
+        if not self.in_tangent and self._tangent_from > 0.0:
             # the change only while the switch can still happen (it also solves for u)
-            if 0.0 < self.change(u) < self._anderson_from:
-                self._mixing = self._anderson
-        self.eps.x.array[:] = self._mixing.step(self.eps.x.array, self.solve(u).x.array)
+            self.in_tangent = 0.0 < self._change_of_gain(u) < self._tangent_from
+        candidate = self.solve(u).x.array
+        relaxation = 1.0 if self.in_tangent else self._relaxation
+        self.eps.x.array[:] += relaxation * (candidate - self.eps.x.array)
         self.eps.x.scatter_forward()
 
     def change(self, u: dolfinx.fem.Function) -> float:
         """||eps(u) - eps|| / ||eps(u)|| in the weighted L2 norm (collective)."""
+        return self._relative(u, self._norm)
+
+    def _change_of_gain(self, u: dolfinx.fem.Function) -> float:
+        """||eps(u) - eps|| / ||eps(u) - eps_start||, eps_start the strain of the first freeze: on a
+        pre-strained stock ||eps(u)|| is mostly the inflow strain, and a change relative to it
+        switched to the tangent while Newton's steps were still 3 % of u (a third pass of
+        demos/copper_wire_schedule.py, which then stopped 12 % off the force balance)."""
+        if self._start is None:
+            self._start = self.eps.copy()
+            self._gained = dolfinx.fem.form((self._candidate - self._start) ** 2 * self._dx)
+        return self._relative(u, self._gained)
+
+    def _relative(self, u: dolfinx.fem.Function, reference: dolfinx.fem.Form) -> float:
+        """||eps(u) - eps|| over the square root of ``reference`` (collective; 0 when it is 0)."""
         self.solve(u)
         comm = self.space.mesh.comm
-        norm = comm.allreduce(dolfinx.fem.assemble_scalar(self._norm))
+        norm = comm.allreduce(dolfinx.fem.assemble_scalar(reference))
         difference = comm.allreduce(dolfinx.fem.assemble_scalar(self._difference))
         return float(np.sqrt(difference / norm)) if norm > 0 else 0.0
+
+    def velocity_derivative(self, direction) -> ufl.Form:
+        """dR/du [direction] of the transport residual R(eps, u) = a(u; eps, w) - L(u; w) at the last
+        solve (eps = eps(u)): the bilinear form C of the strain's sensitivity d eps = -D^-1 C du,
+        D the transport matrix."""
+        return ufl.derivative(self._residual, self.velocity, direction)
+
+    def transport_solve(self, b, x) -> None:
+        """x = D^-1 b with the transport matrix of the last solve (its factors: triangular solves)."""
+        self._system.ksp.solve(b, x)
 
     def destroy(self) -> None:
         self._system.destroy()
