@@ -41,6 +41,22 @@ def test_overrides_take_toml_values_and_bare_strings():
     assert scene.solver.petsc_options["ksp_type"] == "cg"
 
 
+def test_another_material_replaces_the_material_section():
+    """--set material.name (or .law) to another material drops the scene's own material keys (the
+    strip's piecewise_power A would be refused beside a named material); the material.* overrides
+    given with it apply; the same name or law keeps the section."""
+    strip = DEMOS / "strip_mm.toml"
+    scene = load_scene(strip, ["material.name=aluminium_1100_O", "material.rate_factor=power",
+                               "material.m=0.05"])
+    assert (scene.material.law, scene.material.K, scene.material.m) == ("hollomon", 180.0, 0.05)
+    scene = load_scene(strip, ["material.law=hollomon", "material.K=300", "material.n=0.25"])
+    assert (scene.material.K, scene.material.n) == (300.0, 0.25)
+    assert load_scene(strip, ["material.law=piecewise_power", "material.A=250"]).material.A == 250.0
+    with pytest.raises(SceneError) as error:  # no law left: the replaced section is checked
+        load_scene(strip, ["material.law=hollomon"])
+    assert error.value.key.startswith("material")
+
+
 def test_petsc_options_merge_over_the_default_table():
     scene = load_scene(DEMOS / "example1_extrusion.toml", ["solver.petsc_options.mat_mumps_icntl_7=5"])
     assert scene.solver.petsc_options == {"ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps",

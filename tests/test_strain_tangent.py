@@ -1,7 +1,12 @@
 """The transported strain in Newton's step (strain_tangent.py): J = A - B D^-1 C is the derivative
-of the coupled residual F(u, eps(u)), and the step that carries it converges the coupled cold rod in
-fewer solves than the staggered one."""
+of the coupled residual F(u, eps(u)); with it Newton converges the cold rod demo in fewer solves than
+the staggered coupling did, and the plane-strain wedge hardening from zero strain, where the
+staggered coupling did not converge."""
+import math
+from pathlib import Path
+
 import numpy as np
+import pytest
 from mpi4py import MPI
 
 import dolfinx.fem.petsc
@@ -10,7 +15,10 @@ from forming_fenicsx.compat import petsc_vec, set_at_quadrature_points
 from forming_fenicsx.forms import FlowProblem
 from forming_fenicsx.geometry import build_mesh
 from forming_fenicsx.newton import NewtonSolver
+from forming_fenicsx.run import solve_scene
+from forming_fenicsx.scene import load_scene
 from forming_fenicsx.solvers import SecantSolver
+from forming_fenicsx.verification import radial_flow
 
 from conftest import make_scene
 
@@ -64,3 +72,38 @@ def test_reduced_jacobian_is_the_coupled_derivative():
     assert orders["coupled"].min() > 1.7  # measured 2.37, 2.02, 1.91
     assert orders["alone"][-1] < 1.3      # measured 2.35, 1.51, 1.02: first order
     newton.destroy()
+
+
+def test_cold_rod_demo():
+    """demos/aluminium_rod_cold.toml (annealed 6061, 20 -> 12 mm, 30 deg, m 0.2; h 1.2 mm): the ram
+    pressure 2.5 % above its value on h 0.5 mm (measured 308.07 against 300.56 MPa) and above the
+    ideal work K eps^(n+1)/(n+1) = 176.2 MPa of the ideal strain ln(A0/A1) = 1.022 (a rigid-plastic
+    flow does at least the ideal work), the mean exit strain 1.0 to 1.6 times the ideal (measured
+    1.29), in at most 18 linear solves (measured 16; the relaxed step then Anderson took 21, the
+    same flow stress frozen at its mean 10)."""
+    scene = load_scene(Path(__file__).parents[1] / "demos" / "aluminium_rod_cold.toml",
+                       ["output.fields=false", "output.figures=false"])
+    summary = solve_scene(scene)[2]
+    ideal = math.log(20.0 ** 2 / 12.0 ** 2)
+    assert summary["converged"] and summary["failed_checks"] == []
+    assert summary["ideal_strain"] == pytest.approx(ideal, rel=1e-9)
+    assert 205.0 * ideal ** 1.2 / 1.2 < summary["ram_pressure"]
+    assert summary["ram_pressure"] == pytest.approx(300.56 * 1.025, rel=0.01)
+    assert 1.0 < summary["redundant_work_factor"] < 1.6
+    assert summary["linear_solves"] <= 18
+
+
+@pytest.mark.parametrize("law", ["hollomon", "swift", "voce"])
+def test_wedge_hardening_from_zero_strain_by_newton(law):
+    """The smooth wedge (plane strain, Q2, 4 cells, nearly rate-independent) by Newton with the
+    strain in the tangent: exit stress within 0.3 % of the exact one (measured 0.157 %, 0.084 %,
+    0.074 % for Hollomon, Swift and Voce) in at most 40 solves (measured 28, 33, 26). The staggered
+    coupling did not converge here in 300 steps; the direct method takes 48, 40, 32
+    (test_hardening.py)."""
+    curves = {"hollomon": {"law": "hollomon", "K": 1.0, "n": 0.3},
+              "swift": {"law": "swift", "K": 1.0, "n": 0.3, "prestrain": 0.02},
+              "voce": VOCE}
+    run = radial_flow("plane_strain", 0.0, "Q2", 4, material=curves[law])
+    assert run["exit_stress"] == pytest.approx(run["exact_exit_stress"], rel=3e-3)
+    assert run["exit_strain"] == pytest.approx(run["exact_exit_strain"], abs=1e-6)
+    assert run["linear_solves"] <= 40

@@ -920,10 +920,22 @@ def parse_override(text: str) -> tuple[list[str], Any]:
     return keys, value
 
 
+# a material named or a law other than the scene's starts a fresh [material]: the scene's own
+# parameters (a law's A beside a named material's, say) belong to the material they replace
+MATERIAL_IDENTITY = ("name", "law")
+
+
 def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
-    """Apply ``--set section.key=value`` overrides to a parsed scene document."""
-    for text in overrides:
-        keys, value = parse_override(text)
+    """Apply ``--set section.key=value`` overrides to a parsed scene document; ``material.name`` or
+    ``material.law`` set to another value than the scene's replaces its [material] section by the
+    ``material.*`` overrides given."""
+    parsed = [parse_override(text) for text in overrides]
+    material = data.get("material")
+    if isinstance(material, dict) and any(
+            len(keys) == 2 and keys[0] == "material" and keys[1] in MATERIAL_IDENTITY
+            and material.get(keys[1]) != value for keys, value in parsed):
+        data["material"] = {}
+    for keys, value in parsed:
         table = data
         for depth, key in enumerate(keys[:-1]):
             table = table.setdefault(key, {})
