@@ -18,8 +18,9 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 def test_copper_wire_demo(shared_tmp):
     """demos/copper_wire.toml as shipped: Newton in at most 15 solves; the drawing stress between Sachs'
     (no redundant work, no bearing) and 1.4 times it (measured 1.21: Delta = 1.99); the force over the
-    exit area; forces of the whole wire in N; the die pushed apart."""
-    scene = load_scene(DEMOS / "copper_wire.toml")
+    exit area; forces of the whole wire in N; the die pushed apart. Without its figures (1.6 s; the
+    figures of this scene are drawn and checked by tests/test_figures.py)."""
+    scene = load_scene(DEMOS / "copper_wire.toml", ["output.figures=false"])
     summary = run_scene(scene, shared_tmp / "copper_wire")
     sigma0 = summary["scales"]["flow_stress"]
     sachs = sigma0 * sachs_drawing_stress(summary["reduction"], 6.0, 0.05)
@@ -73,10 +74,12 @@ def test_aluminium_rod_demo(shared_tmp):
     the ram force is the ram pressure over the billet's pi R0^2 in N; the ram pressure over the
     ideal work at the process rate's flow stress between 2 and 5 (measured 3.43: the strain rates in
     the die are far above U/H, and redundant work and friction add to the ideal work); the
-    container pressure falls toward the die by the container friction."""
+    container pressure falls toward the die by the container friction. Without its figures (4.0 of
+    the run's 10.9 s on its 90k unknowns; an extrusion die with an entry radius and a bearing is
+    drawn by test_die_profile.py, the flow lines of extrusion by test_run_outputs.py)."""
     import csv
 
-    scene = load_scene(DEMOS / "aluminium_rod.toml")
+    scene = load_scene(DEMOS / "aluminium_rod.toml", ["output.figures=false"])
     summary = run_scene(scene, shared_tmp / "aluminium_rod")
     sigma0 = summary["scales"]["flow_stress"]
     assert summary["converged"] and summary["linear_solves"] <= 15
