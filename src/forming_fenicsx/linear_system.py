@@ -1,6 +1,7 @@
 """One linear system a(s, w) = L(w) of a scalar field coupled to the flow (the transported strain,
 the temperature): assembled with its Dirichlet conditions and solved by a PETSc KSP under a named
-option prefix (MUMPS LU unless the options say otherwise)."""
+option prefix (MUMPS LU unless the options say otherwise; an iterative solve that fails falls back
+to it)."""
 from __future__ import annotations
 
 import dolfinx.fem
@@ -16,7 +17,9 @@ DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "
 
 
 class LinearSystem:
-    """The compiled forms a and L, their matrix, vector and KSP (prefix ``prefix``_)."""
+    """The compiled forms a and L, their matrix, vector and KSP (prefix ``prefix``_). The options
+    are held until the first solve has set the KSP up: a preconditioner's sub-solvers (block
+    Jacobi's ``sub_``) and MUMPS read theirs only then."""
 
     def __init__(self, a: dolfinx.fem.Form, L: dolfinx.fem.Form, comm: MPI.Comm, prefix: str,
                  bcs: list | None = None, options: dict | None = None):
@@ -25,10 +28,9 @@ class LinearSystem:
         self.rhs = dolfinx.fem.petsc.create_vector(L)
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOperators(self.matrix)
-        prefixed = PrefixedOptions(prefix, {**DIRECT, **(options or {})})
-        self.ksp.setOptionsPrefix(prefixed.prefix)
+        self._options: PrefixedOptions | None = PrefixedOptions(prefix, {**DIRECT, **(options or {})})
+        self.ksp.setOptionsPrefix(self._options.prefix)
         self.ksp.setFromOptions()
-        prefixed.release()
 
     def solve(self, target: dolfinx.fem.Function, name: str) -> None:
         """Assemble at the coefficients' current values and solve into ``target`` (collective); a
@@ -43,11 +45,24 @@ class LinearSystem:
         self.rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.rhs, self.bcs)
         self.ksp.solve(self.rhs, petsc_vec(target))
+        self._release_options()
+        if self.ksp.getConvergedReason() < 0 and self.ksp.getType() != "preonly":
+            # the iterative solve failed (the same reason on every rank): MUMPS LU from now on
+            self.ksp.setType("preonly")
+            self.ksp.getPC().setType("lu")
+            self.ksp.getPC().setFactorSolverType("mumps")
+            self.ksp.solve(self.rhs, petsc_vec(target))
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"the {name} solve failed: KSP reason {self.ksp.getConvergedReason()}")
         target.x.scatter_forward()
 
+    def _release_options(self) -> None:
+        if self._options is not None:
+            self._options.release()
+            self._options = None
+
     def destroy(self) -> None:
+        self._release_options()
         for item in (self.ksp, self.matrix, self.rhs):
             item.destroy()
 

@@ -24,7 +24,7 @@ for SUPG, 35 to 39 % (Q1) and 28 to 38 % (Q2) for upwind DG, which is exact only
 on a mesh line and the flow along the mesh lines; the values do not fall with refinement (the step
 as the quadrature points of the inflow side see it, projected on the element). Upwind DG has 3.9
 (Q1) and 2.2 (Q2) times the unknowns and took 2.3 to 2.9 times as long (1 rank). Hence SUPG, the
-default. One linear solve (MUMPS LU, option prefix ``strain_``) per velocity.
+default. One linear solve (GMRES with ILU(1), SOLVER; option prefix ``strain_``) per velocity.
 """
 from __future__ import annotations
 
@@ -39,6 +39,12 @@ from .coordinates import CoordinateSystem
 from .linear_system import LinearSystem, unchanged
 
 PREFIX = "strain"
+# GMRES with block-Jacobi ILU(1) in reverse Cuthill-McKee order (MUMPS LU should it fail): on the
+# copper wire's h 0.03 mm (47 000 unknowns) 5 iterations and 0.06 s against 0.16 s for MUMPS LU,
+# on 2 ranks 18 and 0.07 s against 0.17 s; ILU(0) did not converge (docs/hardening.md). SUPG only:
+# upwind DG's error stalled at 1e-6 on the Q2 wedge with it (MUMPS LU there)
+SOLVER = {"ksp_type": "gmres", "ksp_rtol": 1e-10, "ksp_max_it": 200, "pc_type": "bjacobi",
+          "sub_pc_type": "ilu", "sub_pc_factor_levels": 1, "sub_pc_factor_mat_ordering_type": "rcm"}
 # Newton's coupling switches from the relaxed step to the strain in the tangent once the strain
 # changes by less than TANGENT_FROM of its gain, or after TANGENT_AFTER relaxed freezes (docs/
 # hardening.md: 3e-3, 1e-2 and 3e-2 measured, 3e-2 and switching at once stopped early or failed on
@@ -95,7 +101,8 @@ class StrainField:
         bilinear = ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps
         linear = rate * test * dx + inflow * inflow_strain * w * ds
         self._system = LinearSystem(dolfinx.fem.form(bilinear), dolfinx.fem.form(linear), mesh.comm,
-                                    PREFIX, options=options)
+                                    PREFIX, options={**(SOLVER if scheme == "supg" else {}),
+                                                     **(options or {})})
         # the transport residual R(eps(u), u) at the last solve, for its velocity derivative
         self._residual = ufl.replace(bilinear, {eps: self._candidate}) - linear
         self._dx = dx
