@@ -44,17 +44,21 @@ class LinearSystem:
         dolfinx.fem.petsc.apply_lifting(self.rhs, [self.a], bcs=[self.bcs])
         self.rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.rhs, self.bcs)
-        self.ksp.solve(self.rhs, petsc_vec(target))
+        self.solve_vector(self.rhs, petsc_vec(target), name)
+        target.x.scatter_forward()
+
+    def solve_vector(self, b: PETSc.Vec, x: PETSc.Vec, name: str) -> None:
+        """x = a^-1 b with the matrix last assembled; an iterative solve that fails (the same
+        reason on every rank) is repeated by MUMPS LU, which the KSP keeps from then on."""
+        self.ksp.solve(b, x)
         self._release_options()
         if self.ksp.getConvergedReason() < 0 and self.ksp.getType() != "preonly":
-            # the iterative solve failed (the same reason on every rank): MUMPS LU from now on
             self.ksp.setType("preonly")
             self.ksp.getPC().setType("lu")
             self.ksp.getPC().setFactorSolverType("mumps")
-            self.ksp.solve(self.rhs, petsc_vec(target))
+            self.ksp.solve(b, x)
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"the {name} solve failed: KSP reason {self.ksp.getConvergedReason()}")
-        target.x.scatter_forward()
 
     def _release_options(self) -> None:
         if self._options is not None:

@@ -8,8 +8,9 @@ residual F(u, eps(u)) has the derivative
 Staggered, the step solves A du = F and the strain follows at the next freeze: where the velocity is
 sensitive to the strain the two creep towards each other by a fixed factor per step. Here J du = F is
 solved by GMRES, J applied matrix-free and right-preconditioned with A's factors, starting from
-A^-1 F: each iteration is a pair of triangular solves with A's factors and one with D's (the
-transport solve's own), so no matrix is factorised beyond the staggered step's.
+A^-1 F: each iteration is a pair of triangular solves with A's factors and a transport solve with
+D (strain_transport.StrainField.transport_solve), so no matrix is factorised beyond the staggered
+step's.
 """
 from __future__ import annotations
 

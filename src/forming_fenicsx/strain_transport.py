@@ -183,8 +183,8 @@ class StrainField:
         return ufl.derivative(self._residual, self.velocity, direction)
 
     def transport_solve(self, b, x) -> None:
-        """x = D^-1 b with the transport matrix of the last solve (its factors: triangular solves)."""
-        self._system.ksp.solve(b, x)
+        """x = D^-1 b with the transport matrix of the last solve."""
+        self._system.solve_vector(b, x, "strain")
 
     def destroy(self) -> None:
         self._system.destroy()
