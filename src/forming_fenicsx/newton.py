@@ -92,7 +92,8 @@ class NewtonSolver(SecantSolver):
         self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
         self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
         # the strain's derivative in the step once the coupling has settled (strain_tangent.py)
-        self.strain_tangent = StrainTangent(problem, self.forms.residual.ufl) \
+        self.strain_tangent = StrainTangent(problem, self.forms.residual.ufl, self.newton.A,
+                                            self.newton.ksp) \
             if problem.strain_field is not None else None
 
     def destroy(self) -> None:
@@ -187,7 +188,7 @@ class NewtonSolver(SecantSolver):
         if self._strain_in_tangent():
             error = self._estimate()  # of A's solve, before du moves
             self._estimate = lambda: error
-            converged = self.strain_tangent.solve(self.newton.A, self.newton.ksp, self.newton.b, du)
+            converged = self.strain_tangent.solve(self.newton.b, du)
             coupled = f"  strain in the tangent: {self.strain_tangent.iterations} GMRES iterations" \
                 + ("" if converged else " (not converged: the staggered step)")
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi

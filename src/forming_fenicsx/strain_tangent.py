@@ -27,33 +27,46 @@ GMRES_ITERATIONS = 30
 
 class StrainTangent:
     """B and C compiled from the flow residual and the strain field, and the GMRES solve of J du = F
-    (the options prefix ``strain_tangent_`` can change the Krylov method)."""
+    with Newton's operator A and its factors (the KSP ``factors``; the options prefix
+    ``strain_tangent_`` can change the Krylov method)."""
 
-    def __init__(self, problem, residual: ufl.Form):
+    def __init__(self, problem, residual: ufl.Form, A: PETSc.Mat, factors: PETSc.KSP):
         field = problem.strain_field
-        self._field, self._bcs = field, problem.bcs
+        self._field, self._bcs, self._A = field, problem.bcs, A
         trial = ufl.TrialFunction(problem.system_space)
         velocity = ufl.split(trial)[0] if problem.mixed else trial
         self._forms = (dolfinx.fem.form(ufl.derivative(residual, problem.strain,
                                                        ufl.TrialFunction(field.space))),
                        dolfinx.fem.form(field.velocity_derivative(velocity)))
         self.B, self.C = (dolfinx.fem.petsc.create_matrix(form) for form in self._forms)
-        self._strain_vectors = self.C.createVecs()[1], self.C.createVecs()[1]
+        strain = self.C.createVecs()[1]
+        self._strain_vectors = strain, strain.duplicate()
         self._flow_vector = self.B.createVecs()[1]
-        self._A: PETSc.Mat | None = None
+        self._start = self._flow_vector.duplicate()
+        self._shell = PETSc.Mat().createPython(A.getSizes(), _Shell(self.mult), comm=A.getComm())
+        self._shell.setUp()
+        self._ksp = PETSc.KSP().create(A.getComm())
+        self._ksp.setOperators(self._shell)
+        self._ksp.setType("gmres")
+        self._ksp.setPCSide(PETSc.PC.Side.RIGHT)
+        self._ksp.getPC().setType("python")
+        self._ksp.getPC().setPythonContext(_Shell(factors.solve))
+        self._ksp.setTolerances(rtol=GMRES_TOLERANCE, max_it=GMRES_ITERATIONS)
+        self._ksp.setInitialGuessNonzero(True)
+        self._ksp.setOptionsPrefix("strain_tangent_")
+        self._ksp.setFromOptions()
         self.iterations = 0
 
-    def assemble(self, A: PETSc.Mat) -> None:
-        """B and C at the current u and eps = eps(u), with A the operator assembled there; rows and
-        columns of constrained velocities are left out (their du is set by the Dirichlet rows of A)."""
-        self._A = A
+    def assemble(self) -> None:
+        """B and C at the current u and eps = eps(u); rows and columns of constrained velocities are
+        left out (their du is set by the Dirichlet rows of A)."""
         for matrix, form in zip((self.B, self.C), self._forms):
             matrix.zeroEntries()
             dolfinx.fem.petsc.assemble_matrix(matrix, form, bcs=self._bcs)
             matrix.assemble()
 
     def mult(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        """y = J x = A x - B D^-1 C x."""
+        """y = J x = A x - B D^-1 C x, with A as last assembled."""
         c, d = self._strain_vectors
         self._A.mult(x, y)
         self.C.mult(x, c)
@@ -61,34 +74,21 @@ class StrainTangent:
         self.B.mult(d, self._flow_vector)
         y.axpy(-1.0, self._flow_vector)
 
-    def solve(self, A: PETSc.Mat, factors: PETSc.KSP, F: PETSc.Vec, du: PETSc.Vec) -> bool:
-        """J du = F by GMRES from du (A^-1 F on entry); True when it converged, else du is left as
-        it came."""
-        self.assemble(A)
-        start = du.copy()
-        shell = PETSc.Mat().createPython(A.getSizes(), _Shell(self.mult), comm=A.getComm())
-        shell.setUp()
-        ksp = PETSc.KSP().create(A.getComm())
-        ksp.setOperators(shell)
-        ksp.setType("gmres")
-        ksp.setPCSide(PETSc.PC.Side.RIGHT)
-        ksp.getPC().setType("python")
-        ksp.getPC().setPythonContext(_Shell(factors.solve))
-        ksp.setTolerances(rtol=GMRES_TOLERANCE, max_it=GMRES_ITERATIONS)
-        ksp.setInitialGuessNonzero(True)
-        ksp.setOptionsPrefix("strain_tangent_")
-        ksp.setFromOptions()
-        ksp.solve(F, du)
-        converged = ksp.getConvergedReason() > 0
-        self.iterations = ksp.getIterationNumber()
+    def solve(self, F: PETSc.Vec, du: PETSc.Vec) -> bool:
+        """J du = F by GMRES from du (A^-1 F on entry, A and its factors at the current u); True
+        when it converged, else du is left as it came."""
+        self.assemble()
+        du.copy(self._start)
+        self._ksp.solve(F, du)
+        converged = self._ksp.getConvergedReason() > 0
+        self.iterations = self._ksp.getIterationNumber()
         if not converged:
-            start.copy(du)
-        for item in (ksp, shell, start):
-            item.destroy()
+            self._start.copy(du)
         return converged
 
     def destroy(self) -> None:
-        for item in (self.B, self.C, *self._strain_vectors, self._flow_vector):
+        for item in (self._ksp, self._shell, self.B, self.C, *self._strain_vectors,
+                     self._flow_vector, self._start):
             item.destroy()
 
 
