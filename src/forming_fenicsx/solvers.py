@@ -339,9 +339,13 @@ class SecantSolver:
         reasons = [r for r in self.problem.comm.allgather(local) if r]
         return reasons[0] if reasons else None
 
+    def force_tolerance(self) -> float:
+        """The force-balance criterion's tolerance (solver.force_tolerance; 0: none)."""
+        return self.settings.force_tolerance
+
     def _balanced(self, result: SolveResult) -> bool:
-        """The optional force-balance criterion, evaluated with every coefficient at the iterate."""
-        tolerance = self.settings.force_tolerance
+        """The force-balance criterion, evaluated with every coefficient at the iterate."""
+        tolerance = self.force_tolerance()
         if tolerance == 0 or self.balance is None:
             return True
         self.problem.update_state(self.problem.u, frozen_too=True)
@@ -356,7 +360,7 @@ class SecantSolver:
         if not result.force_balance_checks:
             return ""
         return (f"; force balance residual {result.force_balance_checks[-1]:.3e} above "
-                f"solver.force_tolerance {self.settings.force_tolerance:g}")
+                f"the force tolerance {self.force_tolerance():g}")
 
     def _start(self, initial: dolfinx.fem.Function | None, result: SolveResult, start: float) -> bool:
         """u_{0,0}: ``initial`` (a restart) or the solution with a uniform modulus; False if that failed."""
