@@ -263,8 +263,10 @@ class NewtonSolver(SecantSolver):
         """solver.force_tolerance, or COUPLED_BALANCE when unset and the step carries the strain's
         derivative: the increment of such steps falls below delta while the penalty pressure, which
         a velocity change of delta moves by much more, is still out of balance."""
-        set_by_scene = self.settings.force_tolerance
-        return set_by_scene if set_by_scene > 0 or not self._strain_in_tangent() else COUPLED_BALANCE
+        scene_tolerance = self.settings.force_tolerance
+        if scene_tolerance > 0 or not self._strain_in_tangent():
+            return scene_tolerance
+        return COUPLED_BALANCE
 
     def _strain_in_tangent(self) -> bool:
         """Whether the step carries the strain's derivative (strain_tangent.py): it is then not
