@@ -88,20 +88,28 @@ def hardening_bench(ranks: int, mesh_size: float, repeat: int) -> list[dict[str,
     flow stress (law rate_power, exponent 1e-3: the rate factor "none" of the hardening laws);
     the rows carry the coupled run's solves and time over the frozen run's. A first run of each,
     not counted, compiles the forms: the frozen stress is a constant of the frozen run's forms, and
-    its compilation (7 to 9 s) had made one of every 3 frozen runs the slowest."""
+    its compilation (7 to 9 s) had made one of every 3 frozen runs the slowest. The counted runs
+    alternate, coupled then frozen, so that a load on the machine that comes or goes between them
+    weighs on both."""
     rows = []
     for name, (*_, scale) in HARDENING.items():
         case = {"hardening": name, "mesh_size": round(mesh_size * scale, 9), "method": "newton"}
-        coupled = median_run([_launch(case, ranks) for _ in range(repeat + 1)][1:])
-        frozen_case = {**case, "material": {"law": "rate_power", "A": coupled["mean_flow_stress"],
+        first = _launch(case, ranks)
+        frozen_case = {**case, "material": {"law": "rate_power", "A": first["mean_flow_stress"],
                                             "n": 1e-3}}
-        frozen = median_run([_launch(frozen_case, ranks) for _ in range(repeat + 1)][1:])
-        for row, kind in ((coupled, "strain transported"), (frozen, "frozen at the mean")):
-            rows.append({**row, "flow_stress": kind,
-                         "solves_vs_frozen": row["linear_solves"] / frozen["linear_solves"],
-                         "time_vs_frozen": row["wall_time_s"] / frozen["wall_time_s"]})
+        _launch(frozen_case, ranks)
+        pairs = [(_launch(case, ranks), _launch(frozen_case, ranks)) for _ in range(repeat)]
+        coupled, frozen = (median_run([pair[k] for pair in pairs]) for k in (0, 1))
+        # the time ratio: the median of the pairs' (each pair run back to back)
+        ratios = sorted(c["wall_time_s"] / f["wall_time_s"] for c, f in pairs)
+        for row, kind, runs in ((coupled, "strain transported", ratios),
+                                (frozen, "frozen at the mean", [1.0])):
+            rows.append({**row, "flow_stress": kind, "time_vs_frozen": runs[(len(runs) - 1) // 2],
+                         "time_ratio_runs": runs,
+                         "solves_vs_frozen": row["linear_solves"] / frozen["linear_solves"]})
         print(f"{name}: {coupled['linear_solves']} solves {coupled['wall_time_s']:.2f} s coupled, "
-              f"{frozen['linear_solves']} solves {frozen['wall_time_s']:.2f} s frozen", flush=True)
+              f"{frozen['linear_solves']} solves {frozen['wall_time_s']:.2f} s frozen, time ratios "
+              + ", ".join(f"{r:.2f}" for r in ratios), flush=True)
     return rows
 
 
