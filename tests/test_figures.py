@@ -132,3 +132,17 @@ def test_die_parts_by_slope():
     assert square == ["container wall", "container wall", "die face", "die face"]
     cone = die_parts(np.array([0.0, 1.0, 2.0, 3.0]), np.array([5.0, 5.0, 4.0, 4.0]))
     assert cone == ["container wall", "cone", "land"]
+
+
+def test_surface_cell_depth_is_the_exit_element():
+    """The cold rod demo's mesh (h 1.2 mm): ceil(10 / 1.2) = 9 elements through the radius, so
+    the element at the product's surface (exit radius 6 mm) is 6/9 mm deep; exit_strain.png
+    shades it."""
+    from forming_fenicsx.geometry import build_mesh
+    from forming_fenicsx.postprocess import surface_cell_depth
+
+    scene = load_scene(Path(__file__).parents[1] / "demos" / "aluminium_rod_cold.toml")
+    g = scene.geometry
+    depth = surface_cell_depth(build_mesh(scene, MPI.COMM_WORLD).mesh, g.length - 0.5 * g.thinnest,
+                               g.thinnest * (1 - 1e-9))
+    assert depth == pytest.approx(6.0 / 9.0, rel=1e-6)

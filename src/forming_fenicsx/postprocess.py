@@ -18,7 +18,7 @@ from petsc4py import PETSc
 
 from . import contact, friction
 from .closed_forms import central_burst_indicator
-from .compat import function_space, geometry_degree
+from .compat import cell_geometry_nodes, colliding_cells, function_space, geometry_degree
 from .forms import FlowProblem
 from .geometry import die_coordinate
 from .roles import ROLES
@@ -225,9 +225,10 @@ def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
             "product_flow_stress": product_flow_stress(problem)}
 
 
-def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, np.ndarray] | None:
+def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, Any] | None:
     """A field across the product: y from the axis to the surface on the section half an exit
-    thickness before the workpiece's end (rank 0; None elsewhere)."""
+    thickness before the workpiece's end, and ``surface_cell``, the depth of the cell at the
+    surface there (rank 0; None elsewhere; collective)."""
     from .sections import values_at
 
     g = problem.scene.geometry
@@ -235,7 +236,18 @@ def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, np.
     y = np.linspace(0.0, g.thinnest * (1 - 1e-9), points)
     values = values_at(problem, field, np.column_stack([np.full(points, x), y]),
                        problem.scene.discretisation.degree)
-    return {"y": y, "values": values} if problem.comm.rank == 0 else None
+    depth = surface_cell_depth(problem.mesh, x, y[-1])
+    return {"y": y, "values": values, "surface_cell": depth} if problem.comm.rank == 0 else None
+
+
+def surface_cell_depth(mesh, x: float, y: float) -> float:
+    """How far below the point (x, y) at the surface the lowest node of the cell that holds it
+    lies (collective): the layer in which a profile's values rest on one element."""
+    cells = colliding_cells(mesh, np.array([[x, y, 0.0]]))
+    lowest = np.inf
+    if cells[0] >= 0:
+        lowest = mesh.geometry.x[cell_geometry_nodes(mesh)[cells[0]], 1].min()
+    return float(y - mesh.comm.allreduce(lowest, op=MPI.MIN))
 
 
 def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str, Any]:

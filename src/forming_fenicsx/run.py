@@ -173,7 +173,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
             write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
             if scene.output.figures:
                 write_exit_profile_plot(across, out / f"{stem}.png", title or scene.process.kind, label,
-                                        DIMENSIONS.get(key, ""), scene.units, reference)
+                                        DIMENSIONS.get(key, ""), scene.units, reference,
+                                        unresolved=stem == "exit_strain")
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:
