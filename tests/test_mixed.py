@@ -31,12 +31,13 @@ def test_extrusion_mixed_matches_the_penalty_limit():
 
 
 def test_drawing_mixed_with_contact_and_friction():
-    """Example 2, mu = 0.2, h = 0.1 (measured: mixed 294.81, penalty limit 295.40: -0.2 %)."""
+    """Example 2, mu = 0.2, h = 0.1 (measured: mixed 294.81, penalty limit 295.40 at d = 5e-7:
+    -0.2 %)."""
     penalty, mixed = limit_and_mixed("drawing", {"mesh_size": 0.1, "element": "Q2",
-                                                 "volumetric_integration": "reduced"}, (5e-5, 5e-7),
+                                                 "volumetric_integration": "reduced"}, (5e-7,),
                                      friction={"mu": 0.2})
     assert mixed["converged"] and mixed["force_balance_residual"] < 1e-3
-    assert mixed["mean_die_pressure"] == pytest.approx(penalty[1]["mean_die_pressure"], rel=0.01)
+    assert mixed["mean_die_pressure"] == pytest.approx(penalty[0]["mean_die_pressure"], rel=0.01)
     assert mixed["discrete_divergence"] < 1e-8
 
 
@@ -52,13 +53,14 @@ def test_mixed_scene_checks(sections, key):
 
 def test_newton_on_the_mixed_formulation():
     """Newton's method on the saddle-point system, Example 1 at h = 0.5 (measured: 14 solves against
-    319 for the direct method at delta = 1e-6, ram pressures 2.6607701 and 2.6607701, 2e-9 apart; at
-    h = 0.25, 13 against 537 solves, 25 s instead of 4 s, 2.6158210 and 2.6158201); every iterate
-    stays discretely divergence-free, so the energy remains the line search's merit function."""
+    190 for the direct method at delta = 1e-5, ram pressures 2.6607701 and 2.6607735, 1.3e-6 apart,
+    0.13 % of the 1e-3 allowed; at delta = 1e-6 319 solves, 2e-9 apart; at h = 0.25, 13 against 537
+    solves, 25 s instead of 4 s, 2.6158210 and 2.6158201); every iterate stays discretely
+    divergence-free, so the energy remains the line search's merit function."""
     discretisation = {"mesh_size": 0.5, "formulation": "mixed", "averaging": "quadrature"}
     newton = solve_scene(make_scene(discretisation=discretisation, solver={"method": "newton"}))[2]
-    direct = solve_scene(make_scene(discretisation=discretisation, solver={"method": "direct", "tolerance": 1e-6,
-                                                                           "max_iterations": 1000}))[2]
+    direct = solve_scene(make_scene(discretisation=discretisation, solver={
+        "method": "direct", "tolerance": 1e-5, "max_iterations": 1000}))[2]
     assert newton["converged"] and newton["linear_solves"] <= 15
     assert newton["ram_pressure"] == pytest.approx(direct["ram_pressure"], rel=1e-3)
     assert newton["discrete_divergence"] < 1e-10
