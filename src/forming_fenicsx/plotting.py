@@ -252,12 +252,11 @@ def write_die_plot(profile: dict, path: Path, title: str, scene) -> Path:
 
 
 def write_exit_profile_plot(profile: dict, path: Path, title: str, label: str, dimension: str,
-                           units: Units, reference: tuple[str, float] | None = None,
-                           unresolved: bool = False) -> Path:
+                           units: Units, reference: tuple[str, float] | None = None) -> Path:
     """exit_<quantity>.png: a quantity across the product against y (the hardness or temperature
     profile), with a reference level (``(label, value)``: the ideal strain, the inflow
-    temperature); ``unresolved`` shades the element at the surface (the strain's fall there is
-    the mesh's: docs/hardening.md, known limits)."""
+    temperature); a profile with ``surface_cell`` has the element at the surface shaded (the
+    strain's fall there is the mesh's: docs/hardening.md, known limits)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -265,7 +264,7 @@ def write_exit_profile_plot(profile: dict, path: Path, title: str, label: str, d
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(profile["y"], profile["values"], "b.-", label=f"FE {label}")
-    if unresolved:  # the cell at the surface: a layer there (friction shear) is not resolved
+    if "surface_cell" in profile:  # a layer there (the friction shear) is not resolved
         surface = profile["y"][-1]
         ax.axvspan(surface - profile["surface_cell"], surface, color="0.88",
                    label="the element at the surface: a layer there is not resolved")

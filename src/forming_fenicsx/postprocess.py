@@ -225,10 +225,11 @@ def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
             "product_flow_stress": product_flow_stress(problem)}
 
 
-def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, Any] | None:
+def exit_profile(problem: FlowProblem, field, points: int = 41,
+                 surface_cell: bool = False) -> dict[str, Any] | None:
     """A field across the product: y from the axis to the surface on the section half an exit
-    thickness before the workpiece's end, and ``surface_cell``, the depth of the cell at the
-    surface there (rank 0; None elsewhere; collective)."""
+    thickness before the workpiece's end, and if asked ``surface_cell``, the depth of the cell at
+    the surface there (rank 0; None elsewhere; collective)."""
     from .sections import values_at
 
     g = problem.scene.geometry
@@ -236,8 +237,10 @@ def exit_profile(problem: FlowProblem, field, points: int = 41) -> dict[str, Any
     y = np.linspace(0.0, g.thinnest * (1 - 1e-9), points)
     values = values_at(problem, field, np.column_stack([np.full(points, x), y]),
                        problem.scene.discretisation.degree)
-    depth = surface_cell_depth(problem.mesh, x, y[-1])
-    return {"y": y, "values": values, "surface_cell": depth} if problem.comm.rank == 0 else None
+    profile = {"y": y, "values": values}
+    if surface_cell:
+        profile["surface_cell"] = surface_cell_depth(problem.mesh, x, y[-1])
+    return profile if problem.comm.rank == 0 else None
 
 
 def surface_cell_depth(mesh, x: float, y: float) -> float:

@@ -161,7 +161,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     profile = die_profile(problem)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
     if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
-        profiles.append(("exit_strain", "equivalent_strain", exit_profile(problem, problem.strain),
+        profiles.append(("exit_strain", "equivalent_strain",
+                         exit_profile(problem, problem.strain, surface_cell=True),
                          "equivalent strain", ("entry strain + ideal ln(A0/A1)",
                                                summary["mean_entry_strain"] + summary["ideal_strain"])))
     if problem.temperature_field is not None:  # [thermal]: the product's temperature profile
@@ -173,8 +174,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
             write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
             if scene.output.figures:
                 write_exit_profile_plot(across, out / f"{stem}.png", title or scene.process.kind, label,
-                                        DIMENSIONS.get(key, ""), scene.units, reference,
-                                        unresolved=stem == "exit_strain")
+                                        DIMENSIONS.get(key, ""), scene.units, reference)
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:
