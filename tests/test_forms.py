@@ -47,7 +47,7 @@ def test_front_tension_lowers_the_ram_force_and_keeps_the_balance():
     free = solved(solver={"method": "direct"})
     pulled = solved(solver={"method": "direct"}, process={"applied_force": 0.5})
     assert pulled["converged"]
-    assert pulled["applied_force_x"] == pytest.approx(0.5 * 2.5, rel=1e-12)  # F_N times the exit half-height
+    assert pulled["applied_force_x"] == pytest.approx(0.5 * 5.0, rel=1e-12)  # F_N times the exit height
     assert pulled["force_balance_residual"] < 1e-3
     assert pulled["ram_force"] < free["ram_force"] - 0.1
 

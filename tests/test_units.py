@@ -119,3 +119,48 @@ def test_absolute_and_relative_penalty_together_are_refused():
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "drawing"}, "penalty": {"d_N": 1e-3, "d_N_relative": 1e-3}})
     assert error.value.key == "penalty.d_N" and "not both" in error.value.message
+
+
+STRIP_IN = {"process": {"kind": "drawing", "velocity": 10.0},
+            "geometry": {"entry_thickness": 0.100, "exit_thickness": 0.080, "die_angle": 8.0},
+            "material": {"law": "piecewise_power", "A": 30000.0}, "friction": {"mu": 0.05},
+            "discretisation": {"averaging": "quadrature", "mesh_size_relative": 0.1},
+            "solver": {"method": "newton"}, "output": {"fields": False, "figures": False},
+            "units": {"length": "in", "time": "s", "stress": "psi", "force": "lbf"}}
+
+
+def test_a_strips_forces_are_the_whole_strips_per_unit_width_or_of_its_width():
+    """Issue 34: an inch/psi strip 0.100 -> 0.080 in reported the half model's drawing force
+    (stress times the exit half-thickness). Now every force is the whole strip's: the drawing
+    force is the drawing stress times the whole exit thickness (per unit width, lbf/in), the die
+    takes the same x force; with geometry.width the forces are in lbf, times the width; the
+    separation force acts on each die half and takes the width only."""
+    per_width = solve_scene(scene_from_dict(STRIP_IN))[2]
+    assert per_width["converged"]
+    assert per_width["drawing_force"] == pytest.approx(per_width["drawing_stress"] * 0.080,
+                                                       rel=1e-12)
+    assert per_width["die_force_x"] == pytest.approx(per_width["drawing_force"], rel=1e-3)
+    assert per_width["units"]["quantities"]["drawing_force"] == "lbf/in"
+    wide = solve_scene(scene_from_dict({**STRIP_IN, "geometry": {**STRIP_IN["geometry"],
+                                                                 "width": 2.5}}))[2]
+    assert wide["drawing_stress"] == pytest.approx(per_width["drawing_stress"], rel=1e-12)
+    for key in ("drawing_force", "die_force_x", "die_normal_force_x", "die_friction_force_x",
+                "die_separation_force"):
+        assert wide[key] == pytest.approx(2.5 * per_width[key], rel=1e-12), key
+        assert wide["units"]["quantities"][key] == "lbf"
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "drawing"},
+                         "geometry": {"symmetry": "axisymmetric", "width": 1.0}})
+    assert error.value.key == "geometry.width"
+
+
+def test_an_extruded_strips_ram_force_is_the_whole_billets():
+    """The ram force is the ram pressure times the whole entry thickness (per unit width)."""
+    summary = solve_scene(scene_from_dict({
+        "process": {"kind": "extrusion"}, "geometry": {"entry_thickness": 10.0, "exit_thickness": 5.0},
+        "discretisation": {"mesh_size": 1.0, "averaging": "quadrature"},
+        "solver": {"method": "newton"},
+        "output": {"fields": False, "figures": False}}))[2]
+    assert summary["converged"]
+    assert summary["ram_force"] == pytest.approx(summary["ram_pressure"] * 10.0, rel=1e-9)
+    assert summary["die_force_x"] == pytest.approx(summary["ram_force"], rel=1e-3)

@@ -5,7 +5,7 @@ the symmetry line y = 0. Every form takes its strain rate, divergence, equivalen
 measure weight from here, so that no other module knows which of the two it is.
 
 Plane strain: e(u) = sym(grad u) (2x2; the out-of-plane rate is zero and counts in the deviator),
-integrals per unit width of the half model.
+integrals per unit width of the half model (``whole`` makes them the strip's).
 Axisymmetric: e(u) = [[du_x/dx, sym, 0], [sym, du_y/dy, 0], [0, 0, u_y/y]] with the hoop rate u_y/y,
 integrals over the whole body: the measure carries the weight 2 pi y.
 """
@@ -98,6 +98,13 @@ class CoordinateSystem:
 
     def measure(self, measure: ufl.Measure) -> WeightedMeasure:
         return WeightedMeasure(measure, self.weight)
+
+    @property
+    def whole(self) -> float:
+        """The product's integrals over the model's: 2 for the plane-strain half model (both halves
+        about the symmetry plane y = 0, per unit width), 1 when axisymmetric (the weight 2 pi y
+        already makes them the whole body's)."""
+        return 1.0 if self.axisymmetric else 2.0
 
     def section(self, half_thickness: float) -> float:
         """Area the process force acts on at a section of the given half-thickness (radius): the half

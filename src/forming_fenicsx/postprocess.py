@@ -288,7 +288,8 @@ def free_surface_crossing(problem: FlowProblem) -> float:
 
 
 def throughput(problem: FlowProblem) -> float:
-    """|flux through Gamma1|: the volume formed per unit time (per unit width of the half model)."""
+    """|flux through Gamma1|: the volume the model forms per unit time (per unit width of the half
+    model in plane strain)."""
     return abs(_integrate(problem, ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma1_velocity"])))
 
 
@@ -382,8 +383,33 @@ def discrete_divergence(problem: FlowProblem) -> float:
     return value
 
 
+# forces on the whole product (the model's times CoordinateSystem.whole and the strip's width)
+PRODUCT_FORCES = ("ram_force", "drawing_force", "die_force_x", "die_normal_force_x",
+                  "die_friction_force_x", "applied_force_x")
+# the energy balance's ratios; its other terms are powers, scaled as the forces
+BALANCE_RATIOS = ("residual", "global_residual")
+
+
+def whole_product(problem: FlowProblem, numbers: dict[str, Any]) -> dict[str, Any]:
+    """The model's forces and powers made the whole product's: times 2 for the plane-strain half
+    model (per unit width), and times geometry.width when the scene gives it (then in force
+    units). The die separation force acts on each die half, which the half model holds whole: it
+    takes the width only."""
+    width = problem.scene.geometry.width or 1.0
+    factor = problem.coordinates.whole * width
+    scaled = {key: value * factor if key in PRODUCT_FORCES else value
+              for key, value in numbers.items()}
+    if "die_separation_force" in scaled:
+        scaled["die_separation_force"] *= width
+    if "energy_balance" in scaled:
+        scaled["energy_balance"] = {key: value if key in BALANCE_RATIOS else value * factor
+                                    for key, value in scaled["energy_balance"].items()}
+    return scaled
+
+
 def scalars(problem: FlowProblem) -> dict[str, float]:
-    """The summary numbers of a run: process force and pressure, die forces and the x force balance.
+    """The summary numbers of a run: process force and pressure, die forces and the x force balance,
+    forces on the whole product (whole_product).
 
     Extrusion: ram force and pressure (force over the Gamma1 height), p_av. Drawing: drawing force
     and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end.
@@ -401,7 +427,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
         process = {"drawing_force": force, "drawing_stress": stress, "product_yield_ratio": stress / strength,
                    **die_scalars(problem), **pass_shape(problem)}
-    return {
+    return whole_product(problem, {
         **process,
         **hardening_scalars(problem),
         **thermal_scalars(problem, process),
@@ -421,7 +447,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         # a hardening law's is the transported strain's (hardening_scalars)
         **({} if problem.strain is not None else {"mean_exit_strain": mean_exit_strain(problem)}),
         **dissipation_outside_window(problem),
-    }
+    })
 
 
 def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:

@@ -87,7 +87,7 @@ def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI
         if result.converged and failures else result.reason
     summary = {"warnings": [f.message for f in findings if not f.failure], "failed_checks": failures,
                "converged": converged, "reason": reason, "iteration_converged": result.converged,
-               "units": scene.units.summary(list(body), scene.geometry.axisymmetric), **body}
+               "units": scene.units.summary(list(body), scene.geometry.whole_forces), **body}
     if comm.rank == 0:
         for text in summary["warnings"]:
             log.warning("warning: %s", text)

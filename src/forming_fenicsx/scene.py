@@ -72,6 +72,7 @@ class _Strip:
 
     PAPER: ClassVar[dict[str, float]]
     DIE_KEYS: ClassVar[tuple[str, ...]]
+    width: float | None
     LENGTH_KEY: ClassVar[str]  # the key named when the die does not fit in the strip
     entry_thickness: float | None
     exit_thickness: float | None
@@ -84,6 +85,12 @@ class _Strip:
     @property
     def axisymmetric(self) -> bool:
         return self.symmetry == "axisymmetric"
+
+    @property
+    def whole_forces(self) -> bool:
+        """Whether the reported forces are forces (a round product's, or a strip's of the given
+        ``width``) rather than forces per unit width of a strip."""
+        return self.axisymmetric or self.width is not None
 
     def _diameters(self) -> None:
         """A round product's diameters are the half model's full thicknesses: entry_diameter and
@@ -162,6 +169,11 @@ class _Strip:
         name = self.thickness_name
         for key in ("length", "entry_thickness", "exit_thickness"):
             check_positive(f"geometry.{key.replace('thickness', name)}", getattr(self, key))
+        if self.width is not None:
+            if self.axisymmetric:
+                raise SceneError("geometry.width", "applies to a plane-strain strip only: a round "
+                                 "product's forces are the whole body's; leave it out")
+            check_positive("geometry.width", self.width)
         if self.exit_thickness >= self.entry_thickness:
             raise SceneError(f"geometry.exit_{name}", f"must be < geometry.entry_{name} ({self.entry_thickness}): "
                              f"the die must reduce; got {self.exit_thickness}")
@@ -190,6 +202,7 @@ class ExtrusionGeometry(_Strip):
     entry_diameter: float | None = None
     exit_diameter: float | None = None
     die: str = "square"
+    width: float | None = None  # of a strip: its forces in force units (else per unit width)
 
     @property
     def die_end(self) -> float:
@@ -233,6 +246,7 @@ class _ProfiledDie(_Strip):
     second_angle_length: float | None = None
     die_profile_file: str | None = None
     die: str = "conical"
+    width: float | None = None  # of a strip: its forces in force units (else per unit width)
 
     def _die_file(self) -> None:
         """With die_profile_file: the thicknesses (when left out), die_entry and the recorded

@@ -267,9 +267,9 @@ def run_study(data: dict[str, Any], vary: list[str], out: Path,
             pareto_plot(out / "pareto.png", ordered, with_reference, keys)
         if design:
             quantity_plots(out, ordered, quantities, keys, optima, base.units,
-                           base.geometry.axisymmetric)
+                           base.geometry.whole_forces)
         (out / "study.md").write_text(report(ordered, quantities, optima, base.units,
-                                             base.geometry.axisymmetric) + "\n")
+                                             base.geometry.whole_forces) + "\n")
     return ordered
 
 
@@ -401,14 +401,14 @@ def cheapest(rows: list[dict[str, Any]], quantities: list[str],
     return found
 
 
-def _unit_label(units: Units, name: str, axisymmetric: bool) -> str:
-    unit = units.label(units.dimension(name, axisymmetric))
+def _unit_label(units: Units, name: str, whole_forces: bool) -> str:
+    unit = units.label(units.dimension(name, whole_forces))
     return f"{name} [{unit}]" if unit else name
 
 
 def report(rows: list[dict[str, Any]], quantities: list[str],
            optima: list[dict[str, Any]] | None = None, units: Units | None = None,
-           axisymmetric: bool = False) -> str:
+           whole_forces: bool = False) -> str:
     """Markdown: every run (a design study's in parameter order, a speed-accuracy study's by wall
     time) with its quantities, their errors and references where there are any, whether it
     converged and its cost; a design study's interior optima; the cheapest converged setting per
@@ -419,7 +419,7 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
     measured = [q for q in quantities if has_reference(rows, q)]
     header = [*keys]
     for q in quantities:
-        header += [_unit_label(units, q, axisymmetric)]
+        header += [_unit_label(units, q, whole_forces)]
         header += ["error", "reference"] if q in measured else []
     header += ["converged", "wall s", "linear solves", "dofs"]
     lines = []
@@ -435,7 +435,7 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
                       r["linear_solves"], r["dofs"]])
     parts = [markdown_table(None, header, lines)]
     if design:
-        parts.append(_optima_table(optima or [], units, axisymmetric))
+        parts.append(_optima_table(optima or [], units, whole_forces))
     if measured:
         parts.append(_cheapest_table(rows, quantities, keys))
     elif not design:
@@ -444,11 +444,11 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
     return "\n\n".join(p for p in parts if p)
 
 
-def _optima_table(optima: list[dict[str, Any]], units: Units, axisymmetric: bool) -> str:
+def _optima_table(optima: list[dict[str, Any]], units: Units, whole_forces: bool) -> str:
     if not optima:
         return ""
     parameter = optima[0]["parameter"]
-    lines = [[_unit_label(units, o["quantity"], axisymmetric), o["others"] or "-", o["line"],
+    lines = [[_unit_label(units, o["quantity"], whole_forces), o["others"] or "-", o["line"],
               "no interior optimum" if o["location"] is None else f"{o['location']:.4g}",
               "" if o["value"] is None else f"{o['value']:.5g}"] for o in optima]
     header = ["quantity", "other settings", "line", f"optimum {parameter.split('.')[-1]}",

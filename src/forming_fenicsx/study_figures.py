@@ -38,7 +38,7 @@ def parameter_label(key: str, units: Units) -> str:
 
 
 def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str], keys: list[str],
-                   optima: list[dict[str, Any]], units: Units, axisymmetric: bool) -> list[Path]:
+                   optima: list[dict[str, Any]], units: Units, whole_forces: bool) -> list[Path]:
     """<quantity>.png for each quantity: its converged values against the first design key, one
     line per setting of the other keys, the reference per design point (dashed) where there is
     one, and each line's interior optimum (a star at the vertex of the dotted parabola through the
@@ -69,7 +69,7 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
         if not all(numeric(v) for v in where):  # categories: their names at their places
             ax.set_xticks(list(where.values()), list(where))
         ax.set_xlabel(parameter_label(parameter, units))
-        unit = units.label(units.dimension(quantity, axisymmetric))
+        unit = units.label(units.dimension(quantity, whole_forces))
         ax.set_ylabel(f"{quantity.replace('_', ' ')}{f' [{unit}]' if unit else ''}")
         ax.set_title(f"{quantity.replace('_', ' ')} against {name}")
         ax.grid(True, alpha=0.3)

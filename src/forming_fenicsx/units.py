@@ -1,7 +1,8 @@
 """Units of a scene: labels of a consistent unit system, with no conversion.
 
 A scene may use any consistent system: a length unit L, a time unit T and a stress unit S, with
-velocities in L/T, strain rates in 1/T, forces in S L^2 (per unit width in plane strain: S L) and the
+velocities in L/T, strain rates in 1/T, forces in S L^2 (a strip's per unit width: S L, unless the
+scene gives its width) and the
 material constants in the units their law implies (e.g. A of sigma_p = A rate^n in S T^n). The
 ``[units]`` section names them so that summary.json, the CSV headers and the figures say what the
 numbers are; known names are checked for consistency (force = stress x length^2).
@@ -94,19 +95,19 @@ class Units:
         return self.labelled(name, DIMENSIONS.get(name, ""))
 
     @staticmethod
-    def dimension(key: str, axisymmetric: bool = False) -> str:
-        """The dimension of a reported quantity ("" when unknown); the forces of an axisymmetric
-        model are the whole body's, not per unit width."""
+    def dimension(key: str, whole_forces: bool = False) -> str:
+        """The dimension of a reported quantity ("" when unknown); ``whole_forces``: the forces
+        are forces (a round product's, a strip's of a given width), not per unit width."""
         found = DIMENSIONS.get(key, "")
-        return "force" if axisymmetric and found == "force_per_width" else found
+        return "force" if whole_forces and found == "force_per_width" else found
 
-    def summary(self, keys: list[str], axisymmetric: bool = False) -> dict[str, object]:
+    def summary(self, keys: list[str], whole_forces: bool = False) -> dict[str, object]:
         """What summary.json says of the units: the labels, and the unit of each reported quantity
-        (forces of an axisymmetric model are the whole body's, not per unit width)."""
+        (``whole_forces`` as in ``dimension``)."""
         if not self.given:
             return {"system": "not given: any consistent system ([units] names it; README, 'Units')"}
 
-        quantities = {key: self.label(self.dimension(key, axisymmetric))
+        quantities = {key: self.label(self.dimension(key, whole_forces))
                       for key in keys if key in DIMENSIONS}
         return {"length": self.length, "time": self.time, "stress": self.stress, "force": self.force,
                 "quantities": {key: unit for key, unit in quantities.items() if unit}}
