@@ -477,3 +477,9 @@ MATERIALS["AA6060"] = {"law": "sellars_tegart", "alpha_s": 0.035, "n": 4.67, "Q"
                        "A": 7.6301e10}
 MATERIAL_SOURCES["AA6063"] = "Sheppard, Extrusion of Aluminium Alloys (1999), Table 4.1"
 MATERIAL_SOURCES["AA6060"] = "Verlinden (1993)"
+# Solidus temperatures (K) of the named materials: a [thermal] run whose workpiece passes it melts
+# (ASM Handbook Vol. 2, Properties of Wrought Aluminum and Aluminum Alloys; ASM Metals Handbook
+# Desk Edition: copper's melting point, carbon and 304 stainless steels' solidus)
+SOLIDUS = {"copper_annealed": 1356.0, "low_carbon_steel_annealed": 1768.0,
+           "aluminium_1100_O": 916.0, "aluminium_6061_O": 855.0, "aluminium_2024_T4": 775.0,
+           "stainless_304_annealed": 1673.0, "AA6063": 888.0, "AA6060": 858.0}

@@ -15,6 +15,7 @@ at the die nodes), which keep the convergence from being quadratic on fine meshe
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -78,6 +79,32 @@ def next_trial(energies: dict[float, float]) -> float | None:
     return b + GOLDEN * (c - b) if c - b > b - a else b - GOLDEN * (b - a)
 
 
+# Newton's stops after which the direct method goes on (not a stop request, nor ill-conditioned
+# systems, which the direct method's would share)
+FALL_BACK_ON = ("non_finite", "diverging", "stalled", "max_iterations")
+STOPPED = {"non_finite": "failed a solve or gave a non-finite iterate", "diverging": "diverged",
+           "stalled": "stalled", "max_iterations": "did not converge in solver.max_iterations"}
+
+
+def newton_trigger(records: list[IterationRecord]) -> str:
+    """What the Newton steps measured as they failed, for the message: the increment's rise from
+    its least value, and the most Gauss points that switched the flow law's branch and die nodes
+    that switched the contact set in one step since then (the non-smooth parts of the operator)."""
+    steps = [r for r in records if math.isfinite(r.increment)]
+    if len(steps) < 2:
+        return ""
+    least = min(range(len(steps)), key=lambda k: steps[k].increment)
+    after = steps[least:]
+    law = max(r.law_switches for r in after)
+    contact = max(r.contact_switches for r in after)
+    text = (f": its increment rose from {steps[least].increment:.2e} (step {steps[least].inner}) "
+            f"to {steps[-1].increment:.2e}")
+    if law > 0 or contact > 0:
+        text += (f" while up to {law} Gauss points switched the flow law's branch and {contact} "
+                 "die nodes the contact set in a step")
+    return text
+
+
 class NewtonSolver(SecantSolver):
     """Newton's method (solver.method = "newton") after a few direct secant iterates.
 
@@ -93,6 +120,8 @@ class NewtonSolver(SecantSolver):
         self._change = petsc_vec(problem.u).duplicate()
         self._contact_set = None if self.forms.contact_set is None else \
             dolfinx.fem.petsc.create_vector(self.forms.contact_set)
+        self._newton_start: dolfinx.fem.Function | None = None  # u when the Newton steps began
+        self._newton_first = 0  # the history's index of the first Newton step
         self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
         self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
         # the strain's derivative in the step once the coupling has settled (strain_tangent.py)
@@ -313,7 +342,7 @@ class NewtonSolver(SecantSolver):
     def timings(self) -> Timings:
         return self.linear.timings + self.newton.timings
 
-    def _iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
+    def _newton_iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
         """Secant start, then Newton steps until the step is below delta (and the force balance holds)."""
         problem, settings = self.problem, self.settings
         start = time.perf_counter()
@@ -329,6 +358,7 @@ class NewtonSolver(SecantSolver):
             increments.append(self._step(result, 0, inner, start))
             if self._must_stop(result, increments, 0, inner, ""):
                 return result
+        self._newton_start, self._newton_first = problem.u.copy(), len(result.history)
         set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
         self.forms.dual.x.array[:] *= settings.dual_start
         self.keep_previous()  # the first operator's previous iterate: its contact set is u's
@@ -356,4 +386,26 @@ class NewtonSolver(SecantSolver):
         result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
                          f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})"
                          f"{hint}")
+        result.cause = "max_iterations"
         return result
+
+    def _iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
+        """Newton's method (_newton_iterate); should it diverge, stall or fail a solve, the direct
+        method (3.13) from the iterate Newton started from (the secant start's)."""
+        result = self._newton_iterate(initial)
+        if result.converged or result.cause not in FALL_BACK_ON or self._newton_start is None:
+            return result
+        steps = result.history[self._newton_first:]
+        failed = (f"Newton's method {STOPPED[result.cause]} at step {steps[-1].inner if steps else 0}"
+                  f"{newton_trigger(steps)}")
+        if self.problem.comm.rank == 0:
+            log.warning("%s: the direct method (3.13) goes on from the secant start's iterate", failed)
+        self.settings = dataclasses.replace(self.settings, method="direct")
+        direct = SecantSolver._iterate(self, self._newton_start)
+        direct.history = result.history + direct.history
+        direct.linear_solves += result.linear_solves
+        direct.force_balance_checks = result.force_balance_checks + direct.force_balance_checks
+        direct.fallback = failed
+        direct.reason = (f"{direct.reason}, by the direct method (3.13) after {failed} (set "
+                         "solver.method = \"direct\" to start with it)")
+        return direct

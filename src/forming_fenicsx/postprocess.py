@@ -19,6 +19,7 @@ from petsc4py import PETSc
 from . import contact, friction
 from .closed_forms import central_burst_indicator
 from .compat import cell_geometry_nodes, colliding_cells, function_space, geometry_degree
+from .contact_zone import facet_integrals, zone_scalars
 from .forms import FlowProblem
 from .geometry import die_coordinate
 from .roles import ROLES
@@ -142,25 +143,25 @@ def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
 
 
 def die_scalars(problem: FlowProblem) -> dict[str, float]:
-    """q_av over the contact part of the die from its entry to the land (the paper's mean die
-    pressure; over all of Gamma3 for a user's mesh), contact length and the x where the workpiece
-    leaves the die (last node of Gamma3 with positive contact pressure)."""
+    """q_av over the contact zone's part in the die from its entry to the land (the paper's mean
+    die pressure; over all of Gamma3 for a user's mesh), the contact length (contact_zone.py:
+    the facets inside the zone count whole, however finely the die is described), and the x
+    where the workpiece leaves the die (last node of Gamma3 with positive contact pressure)."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
     start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
     cone = 1.0 if g.mesh_file else ufl.conditional(
         ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
-    touching = in_contact(problem)
-    ds = problem.ds_contact
-    cone_contact = _integrate(problem, touching * cone * ds)
-    q_av = _integrate(problem, die_pressure(problem) * touching * cone * ds) / cone_contact if cone_contact else 0.0
+    facets = facet_integrals(problem, die_pressure(problem), in_contact(problem), cone)
+    zone = zone_scalars(facets) if facets is not None else None
     profile = die_profile(problem)
     end = None
     if profile is not None:
         pressed = profile["contact_pressure"] > 1e-9 * max(profile["contact_pressure"].max(), 1e-300)
         end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
-    length = _integrate(problem, touching * problem.ds.measure(ROLES["gamma3_contact"]))
-    return {"mean_die_pressure": q_av, "contact_length": length,
-            "contact_end_x": problem.comm.bcast(end, root=0)}
+    zone = problem.comm.bcast(zone, root=0)
+    return {"mean_die_pressure": zone["mean_die_pressure"], "contact_length": zone["contact_length"],
+            "contact_end_x": problem.comm.bcast(end, root=0),
+            "die_contact_fraction": zone["die_contact_fraction"]}
 
 
 def pass_shape(problem: FlowProblem) -> dict[str, float]:
@@ -255,7 +256,8 @@ def surface_cell_depth(mesh, x: float, y: float) -> float:
 
 def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str, Any]:
     """With [thermal]: the temperature taken from the converged flow (one way), the product's mean
-    (flux-weighted), lowest and highest exit temperature (across the exit section), and the energy
+    (flux-weighted), lowest and highest exit temperature (across the exit section), the workpiece's
+    lowest and highest (nodal values), and the energy
     balance (TemperatureField.energy_balance) against the work of the driving force, the ram or
     drawing force (``numbers``) times the process velocity (plus the applied force's on Gamma5)."""
     field = problem.temperature_field
@@ -271,9 +273,12 @@ def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str
     profile = exit_profile(problem, field.T)
     extremes = problem.comm.bcast(
         (float(profile["values"].min()), float(profile["values"].max())) if profile else None)
+    nodal = field.T.x.array
     return {"mean_exit_temperature": mean_through(problem, field.T), "min_exit_temperature": extremes[0],
-            "max_exit_temperature": extremes[1], "energy_balance": balance,
-            "energy_balance_residual": balance["global_residual"]}
+            "max_exit_temperature": extremes[1],
+            "min_temperature": problem.comm.allreduce(float(nodal.min()), op=MPI.MIN),
+            "max_temperature": problem.comm.allreduce(float(nodal.max()), op=MPI.MAX),
+            "energy_balance": balance, "energy_balance_residual": balance["global_residual"]}
 
 
 def free_surface_crossing(problem: FlowProblem) -> float:
@@ -305,11 +310,13 @@ def die_penetration(problem: FlowProblem) -> float:
 
 
 def die_contact_fraction(problem: FlowProblem) -> float:
-    """The length of Gamma3 in contact (a positive contact pressure) over the length of Gamma3."""
+    """The contact length over the length of Gamma3 (contact_zone.py; NaN without a die)."""
     if not problem.has_contact:
         return math.nan
-    ds = problem.ds_contact
-    return _integrate(problem, in_contact(problem) * ds) / _integrate(problem, 1.0 * ds)
+    facets = facet_integrals(problem, problem.contact_pressure(problem.u), in_contact(problem), 1.0)
+    zone = zone_scalars(facets) if facets is not None else None
+    zone = problem.comm.bcast(zone, root=0)
+    return zone["die_contact_fraction"]
 
 
 def exit_zone_rate_ratio(problem: FlowProblem) -> float:
@@ -337,18 +344,19 @@ def mean_exit_strain(problem: FlowProblem) -> float:
 
 
 def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:
-    """For the law (4.5): the fractions of the plastic work rate int sigma_p(rate) rate dissipated at rates
-    above rate2 and below rate1, where the law is linear (viscous) instead of nearly rate-independent."""
+    """The fractions of the plastic work rate int sigma_p rate dissipated where the law is linear
+    (viscous) instead of nearly rate-independent: below rate1 and above rate2 for the law (4.5),
+    below the rate floor for the others."""
     law = problem.scene.material
-    if not hasattr(law, "rate2"):
-        return {}
     rate = problem.equivalent_strain_rate(problem.u)
-    power = law.secant_ufl(rate) * rate * rate
+    power = problem.flow_stress(problem.u) * rate
     total = _integrate(problem, power * problem.dx)
     if total <= 0:
         return {}
-    return {f"dissipation_{name}": _integrate(problem, ufl.conditional(test, power, 0.0) * problem.dx) / total
-            for name, test in (("above_rate2", ufl.gt(rate, law.rate2)), ("below_rate1", ufl.lt(rate, law.rate1)))}
+    tests = (("above_rate2", ufl.gt(rate, law.rate2)), ("below_rate1", ufl.lt(rate, law.rate1))) \
+        if hasattr(law, "rate2") else (("below_rate_floor", ufl.lt(rate, law.rate_floor)),)
+    return {f"dissipation_{name}": _integrate(problem, ufl.conditional(test, power, 0.0)
+                                              * problem.dx) / total for name, test in tests}
 
 
 def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
@@ -442,7 +450,8 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
         "free_surface_crossing": free_surface_crossing(problem),
         "die_penetration": die_penetration(problem),
-        "die_contact_fraction": die_contact_fraction(problem),
+        **({} if "die_contact_fraction" in process else
+           {"die_contact_fraction": die_contact_fraction(problem)}),
         "exit_zone_rate_ratio": exit_zone_rate_ratio(problem),
         # a hardening law's is the transported strain's (hardening_scalars)
         **({} if problem.strain is not None else {"mean_exit_strain": mean_exit_strain(problem)}),

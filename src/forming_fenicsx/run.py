@@ -67,6 +67,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
         "dofs": problem.unknowns,
         "linear_solves": result.linear_solves,
         "outer_iterations": result.outer_iterations,
+        "solver_fallback": result.fallback,
         "solve_error_estimate": result.solve_error,
         "restarted_from": str(restart) if restart is not None else None,
         **numbers,
@@ -79,12 +80,20 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
 def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
     """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
     converged (a failed check means it did not, whatever the iteration did) and why, the units, then the
-    run's numbers. Warnings are logged on rank 0 (a failure is the reason the command prints)."""
-    findings = check_run(body, scene)
+    run's numbers. The reason leads with what the run measured: a failed check of a converged
+    iteration, or a cause (the law's rate window, drawability) found at the last iterate of one that
+    stopped, before the iteration's own reason. Warnings are logged on rank 0 (a failure is the
+    reason the command prints)."""
+    findings = check_run(body, scene, result.converged)
     failures = [f.message for f in findings if f.failure]
     converged = result.converged and not failures
-    reason = f"the iteration converged ({result.reason}), but the answer cannot be right: {failures[0]}" \
-        if result.converged and failures else result.reason
+    cause = next((f.message for f in findings if f.cause), None)
+    if result.converged and failures:
+        reason = f"the iteration converged ({result.reason}), but the answer cannot be right: {failures[0]}"
+    elif not result.converged and cause is not None:
+        reason = f"{cause} (the iteration stopped: {result.reason})"
+    else:
+        reason = result.reason
     summary = {"warnings": [f.message for f in findings if not f.failure], "failed_checks": failures,
                "converged": converged, "reason": reason, "iteration_converged": result.converged,
                "units": scene.units.summary(list(body), scene.geometry.whole_forces), **body}

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from .errors import SceneError
-from .material import LAWS, MATERIALS, FlowLaw, PiecewisePowerLaw
+from .material import LAWS, MATERIALS, SOLIDUS, FlowLaw, PiecewisePowerLaw
 from .strain_profile import check_section, read_strain_profile
 from .coordinates import SYMMETRIES
 from .die_profile import DieProfile, parametric_profile, polyline_profile, read_profile_csv
@@ -583,7 +583,8 @@ class Thermal:
     Zener-Hollomon law reads them). ``inflow_temperature``: the billet or wire entering;
     ``die_*``: the die contact (Gamma3), ``container_*`` (extrusion): the container wall, the die's
     values unless given; ``air_*``: the free surfaces (``air_h`` 0: insulated); ``friction_share``:
-    the share of the friction heat into the workpiece (the rest into the die)."""
+    the share of the friction heat into the workpiece (the rest into the die); ``solidus``: where
+    the workpiece starts to melt (a named material's unless given; sanity.py checks it)."""
 
     heat_capacity: float | None = None
     conductivity: float | None = None
@@ -596,6 +597,7 @@ class Thermal:
     air_h: float = 0.0
     air_temperature: float = 293.15
     friction_share: float = 0.5
+    solidus: float | None = None
 
     REQUIRED: ClassVar[tuple[str, ...]] = ("heat_capacity", "conductivity", "inflow_temperature")
 
@@ -620,13 +622,25 @@ class Thermal:
             if value is not None and not value >= 0:
                 raise SceneError(f"thermal.{key}", f"must be a finite number >= 0; got {value}")
         for key in ("inflow_temperature", "die_temperature", "container_temperature",
-                    "air_temperature"):
+                    "air_temperature", "solidus"):
             if getattr(self, key) is not None and not getattr(self, key) > 0:
                 raise SceneError(f"thermal.{key}",
                                  f"must be > 0 (kelvin); got {getattr(self, key)}")
         for key in ("heat_fraction", "friction_share"):
             if not 0 <= getattr(self, key) <= 1:
                 raise SceneError(f"thermal.{key}", f"must lie in [0, 1]; got {getattr(self, key)}")
+        if self.solidus is not None and not self.inflow_temperature < self.solidus:
+            raise SceneError("thermal.inflow_temperature", f"{self.inflow_temperature:g} K is not "
+                             f"below the solidus {self.solidus:g} K: the workpiece enters molten")
+
+    @property
+    def coldest(self) -> float:
+        """The lowest temperature that enters or surrounds the workpiece: with no heat sink in it,
+        no point of a steady workpiece can be colder (the maximum principle)."""
+        around = [self.inflow_temperature, self.die_temperature]
+        around += [self.container_temperature] if self.container_h else []
+        around += [self.air_temperature] if self.air_h else []
+        return min(around)
 
 
 # The summary numbers accuracy on demand can drive, by process; the first is the default
@@ -736,6 +750,18 @@ class Scene:
             self.friction.mollification_length = self.discretisation.mesh_size
         if self.thermal is not None:
             self.thermal.resolve()
+            if self.thermal.solidus is None:
+                self.thermal.solidus = SOLIDUS.get(getattr(self.material, "name", None))
+        self._not_molten()
+
+    def _not_molten(self) -> None:
+        """An isothermal law's temperature must lie below the named material's solidus."""
+        temperature = getattr(self.material, "temperature", None)
+        solidus = SOLIDUS.get(getattr(self.material, "name", None))
+        if self.thermal is None and temperature is not None and solidus is not None \
+                and not temperature < solidus:
+            raise SceneError("material.temperature", f"{temperature:g} K is not below the solidus "
+                             f"of {self.material.name} ({solidus:g} K): the workpiece is molten")
 
     def check(self) -> None:
         """Checks of each section, then of values that are valid alone but not together."""

@@ -181,6 +181,10 @@ class IterationRecord:
     contact_switches: int = -1
 
 
+# why an iteration stops unconverged (SolveResult.cause)
+STOP_CAUSES = ("stop", "ill_conditioned", "non_finite", "diverging", "stalled", "max_iterations")
+
+
 @dataclass
 class SolveResult:
     converged: bool
@@ -191,6 +195,8 @@ class SolveResult:
     force_balance_checks: list[float] = field(default_factory=list)
     timings: Timings = field(default_factory=Timings)
     iteration_time: float = 0.0
+    cause: str = ""  # why an iteration stopped unconverged: one of STOP_CAUSES
+    fallback: str | None = None  # what failed before a fallback method took over (newton.py)
 
     @property
     def solve_error(self) -> float:
@@ -283,6 +289,7 @@ class SecantSolver:
         stop = self._stop_reason()
         if stop:
             result.reason = f"{stop} at outer {outer}, inner {inner}; the last completed iterate is written"
+            result.cause = "stop"
             return True
         solve_error = next((r.solve_error for r in reversed(result.history) if not math.isnan(r.solve_error)), 0.0)
         if math.isfinite(increment) and solve_error > UNSOLVABLE * delta:
@@ -290,6 +297,7 @@ class SecantSolver:
                              f"solve, {solve_error:.2e} (one step of iterative refinement), is {UNSOLVABLE:g} times "
                              f"delta {delta:g} or more at outer {outer}, inner {inner}, so the increment cannot "
                              f"fall below delta; {self._penalties()}")
+            result.cause = "ill_conditioned"
             return True
         if solve_error > ILL_CONDITIONED * delta:
             friction_note += (f"; the linear systems are ill-conditioned (estimated solve error {solve_error:.1e}): "
@@ -298,6 +306,7 @@ class SecantSolver:
             result.reason = result.reason or (f"non-finite iterate (NaN or Inf) at outer {outer}, inner "
                                               f"{inner}; the results are the previous iterate. Try a larger "
                                               "penalty parameter (penalty.d, penalty.d_N)")
+            result.cause = "non_finite"
             return True
         if diverging(increments):
             others = " or ".join(m for m in ("direct", "modified") if m != settings.method)
@@ -305,11 +314,13 @@ class SecantSolver:
                              f"{outer}, inner {inner}; last increments {_recent(increments)}){friction_note}. "
                              f"Try the {others} method, a smaller friction coefficient or larger penalty "
                              "parameters; see history.csv")
+            result.cause = "diverging"
             return True
         if stalled(increments, settings.stall_window):
             result.reason = (f"stalled or oscillating: no smaller increment in the last "
                              f"{settings.stall_window} iterations (outer {outer}, inner {inner}; last "
                              f"increments {_recent(increments)}){friction_note}; see history.csv")
+            result.cause = "stalled"
             return True
         return False
 
@@ -440,6 +451,7 @@ class SecantSolver:
             else:
                 result.reason = (f"no convergence in {settings.max_iterations} iterations "
                                  f"(last increment {increment:.3e}, delta {delta:g}{self._balance_note(result)})")
+                result.cause = "max_iterations"
                 return result
             if outer_limit == 1:
                 break

@@ -34,7 +34,8 @@ DIMENSIONS = {
     "strain_rate": "strain_rate", "flow_stress": "stress", "length": "length",
     "mean_flow_stress": "stress", "product_flow_stress": "stress", "temperature": "temperature",
     "mean_exit_temperature": "temperature", "max_exit_temperature": "temperature",
-    "min_exit_temperature": "temperature",
+    "min_exit_temperature": "temperature", "min_temperature": "temperature",
+    "max_temperature": "temperature",
 }
 
 
