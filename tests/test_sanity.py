@@ -22,7 +22,7 @@ def test_a_normal_run_passes_every_check():
 
 
 @pytest.mark.parametrize("key, warn, fail, check, phrase", [
-    ("die_penetration", 0.02, 0.083, "die_penetration", "penalty.d_N"),
+    ("die_penetration", 0.02, 0.083, "die_penetration", "smaller solver.tolerance"),
     ("relative_divergence", 0.2, 0.6, "compressibility", "the material compresses"),
     ("product_yield_ratio", 0.95, 1.05, "drawability", "not drawable"),
     ("free_surface_crossing", 0.08, 0.98, "free_surface_crossing", "refine discretisation.mesh_size"),
@@ -49,8 +49,85 @@ def test_work_outside_the_rate_window_warns():
     found = check_run({**NORMAL, "dissipation_above_rate2": 0.2, "dissipation_below_rate1": 0.6}, SCENE)
     messages = [f.message for f in found if f.check == "rate_window"]
     assert len(messages) == 2 and not any(f.failure for f in found)
-    assert "raise material.rate2" in messages[0] and "Lower material.rate1" in messages[1]
+    assert "Raise material.rate2" in messages[0] and "Lower material.rate1" in messages[1]
 
 
 def test_ill_conditioned_solves_warn():
     assert not findings(solve_error_estimate=1e-5)["solve_accuracy"].failure
+
+
+def test_the_penetration_advice_fits_the_contact_settings():
+    """Issue 34: an unconverged Newton run with the default augmented contact was told to "leave
+    penalty.d_N out and penalty.augmented at its default", which it did."""
+    pure = scene_from_dict({"process": {"kind": "drawing"}, "penalty": {"augmented": False}})
+    message = check_run({**NORMAL, "die_penetration": 0.03}, pure)[0].message
+    assert "penalty.augmented = true" in message
+    unconverged = check_run({**NORMAL, "die_penetration": 0.03}, SCENE, converged=False)[0].message
+    assert "had not settled when the iteration stopped" in unconverged
+    assert "leave penalty.d_N out" not in unconverged
+
+
+def test_a_viscous_law_is_named_as_why_the_product_deforms_after_the_die():
+    """Issue 34: far outside (4.5)'s rate window the product stretches like a fluid, and the
+    reason told the user to reduce the reduction, the die angle or the friction."""
+    found = check_run({**NORMAL, "dissipation_above_rate2": 1.0, "exit_zone_rate_ratio": 1.14},
+                      SCENE)
+    failure = next(f for f in found if f.failure)
+    assert failure.cause and "viscous at this velocity" in failure.message
+    assert "material.rate2" in failure.message and "reduce the reduction" not in failure.message
+
+
+def test_an_overdrawn_wire_is_not_drawable_and_called_a_wire():
+    wire = scene_from_dict({"process": {"kind": "drawing"},
+                            "geometry": {"symmetry": "axisymmetric"}})
+    found = check_run({**NORMAL, "product_yield_ratio": 0.991, "exit_zone_rate_ratio": 4.75,
+                       "reduction": 0.64}, wire)
+    assert found[0].failure and found[0].cause
+    assert found[0].message.startswith("not drawable") and "drawn wire" in found[0].message
+    assert "strip" not in found[0].message
+
+
+HOT = {"max_temperature": 760.0, "min_temperature": 690.0,
+       "energy_balance": {"residual": 2e-4, "global_residual": 6e-4}}
+HOT_SCENE = scene_from_dict({
+    "process": {"kind": "extrusion", "velocity": 5.0},
+    "geometry": {"die": "conical", "symmetry": "axisymmetric", "entry_diameter": 50.0,
+                 "exit_diameter": 20.0},
+    "material": {"name": "AA6063"}, "discretisation": {"averaging": "quadrature"},
+    "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
+    "thermal": {"heat_capacity": 2.98, "conductivity": 201.0, "inflow_temperature": 723.15,
+                "container_h": 5.0, "container_temperature": 693.15, "air_h": 0.01}})
+
+
+@pytest.mark.parametrize("changed, check, failure", [
+    ({}, None, None),
+    ({"max_temperature": 860.0}, "melting", False),   # 0.968 of AA6063's solidus 888 K
+    ({"max_temperature": 1675.0}, "melting", True),   # issue 34: 1402 C, converged unflagged
+    ({"min_temperature": 290.0}, "temperature_undershoot", False),  # 3 K below the air
+    ({"min_temperature": 250.0}, "temperature_undershoot", True),
+    ({"energy_balance": {"residual": 2e-4, "global_residual": -0.016}}, "energy_balance", False),
+    ({"energy_balance": {"residual": 0.08, "global_residual": 6e-4}}, "energy_balance", True),
+])
+def test_heat_checks(changed, check, failure):
+    found = {f.check: f for f in check_run({**NORMAL, **HOT, **changed}, HOT_SCENE)
+             if f.check in ("melting", "temperature_undershoot", "energy_balance")}
+    assert HOT_SCENE.thermal.solidus == 888.0 and HOT_SCENE.thermal.coldest == 293.15
+    if check is None:
+        assert found == {}
+    else:
+        assert list(found) == [check] and found[check].failure == failure
+
+
+def test_a_molten_workpiece_is_refused_before_any_work():
+    from forming_fenicsx.errors import SceneError
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "extrusion"}, "material": {"name": "AA6063",
+                                                                      "temperature": 900.0},
+                         "discretisation": {"averaging": "quadrature"},
+                         "units": {"stress": "MPa", "time": "s"}})
+    assert error.value.key == "material.temperature" and "solidus" in error.value.message
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "drawing"},
+                         "thermal": {"heat_capacity": 3.4, "conductivity": 390.0,
+                                     "inflow_temperature": 1400.0, "solidus": 1356.0}})
+    assert error.value.key == "thermal.inflow_temperature"

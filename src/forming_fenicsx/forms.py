@@ -335,6 +335,18 @@ class FlowProblem:
         return all(field.change(u) < tolerance for field in self.frozen
                    if field is not self.friction_state)
 
+    def snapshot(self) -> list[object]:
+        """The frozen coefficients' and the contact multiplier's values (restore)."""
+        multiplier = [] if self.multiplier is None else [self.multiplier.value.x.array.copy()]
+        return [field.snapshot() for field in self.frozen] + multiplier
+
+    def restore(self, saved: list[object]) -> None:
+        """The values of a snapshot back."""
+        if self.multiplier is not None:  # first: the friction bound's derived fields read it
+            self.multiplier.value.x.array[:] = saved[-1]
+        for field, values in zip(self.frozen, saved, strict=False):
+            field.restore(values)
+
     def contact_settled(self, increment: float) -> bool:
         """After an iterate taken in full: the augmented contact's multiplier update
         (ContactMultiplier.settled); True when there is none or it has settled."""

@@ -3,7 +3,9 @@ schedule (the outer loop of the modified method (3.33), every iterate of the dir
 every Newton step). The friction bound tau_f is one; a strain or temperature field joins the same way.
 
 Protocol: ``freeze(u)`` takes the coefficient from the velocity u; ``change(u)`` is the relative
-change freezing at u would make (the outer loop has converged when every change is below delta).
+change freezing at u would make (the outer loop has converged when every change is below delta);
+``snapshot()`` and ``restore(saved)`` keep and bring back its values (an iteration that restarts
+from an earlier iterate, newton.py's fallback, restores what its coefficients were then).
 """
 from __future__ import annotations
 
@@ -21,6 +23,10 @@ class FrozenCoefficient(Protocol):
 
     def change(self, u: dolfinx.fem.Function) -> float: ...
 
+    def snapshot(self) -> object: ...
+
+    def restore(self, saved: object) -> None: ...
+
 
 class FrozenVelocity:
     """A coefficient that is a function of a frozen velocity ``state`` (u_{0,m} of (3.33) for the
@@ -35,6 +41,14 @@ class FrozenVelocity:
     def freeze(self, u: dolfinx.fem.Function) -> None:
         petsc_vec(u).copy(petsc_vec(self.state))
         self.state.x.scatter_forward()
+        for field in self.derived:
+            field.update()
+
+    def snapshot(self) -> object:
+        return self.state.x.array.copy()
+
+    def restore(self, saved: object) -> None:
+        self.state.x.array[:] = saved
         for field in self.derived:
             field.update()
 

@@ -122,6 +122,7 @@ class NewtonSolver(SecantSolver):
             dolfinx.fem.petsc.create_vector(self.forms.contact_set)
         self._newton_start: dolfinx.fem.Function | None = None  # u when the Newton steps began
         self._newton_first = 0  # the history's index of the first Newton step
+        self._coupled_start: list[object] = []  # the coupled fields' values then (problem.snapshot)
         self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
         self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
         # the strain's derivative in the step once the coupling has settled (strain_tangent.py)
@@ -359,6 +360,7 @@ class NewtonSolver(SecantSolver):
             if self._must_stop(result, increments, 0, inner, ""):
                 return result
         self._newton_start, self._newton_first = problem.u.copy(), len(result.history)
+        self._coupled_start = problem.snapshot()
         set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
         self.forms.dual.x.array[:] *= settings.dual_start
         self.keep_previous()  # the first operator's previous iterate: its contact set is u's
@@ -401,6 +403,7 @@ class NewtonSolver(SecantSolver):
         if self.problem.comm.rank == 0:
             log.warning("%s: the direct method (3.13) goes on from the secant start's iterate", failed)
         self.settings = dataclasses.replace(self.settings, method="direct")
+        self.problem.restore(self._coupled_start)
         direct = SecantSolver._iterate(self, self._newton_start)
         direct.history = result.history + direct.history
         direct.linear_solves += result.linear_solves

@@ -155,6 +155,13 @@ class StrainField:
         self.eps.x.array[:] += relaxation * (candidate - self.eps.x.array)
         self.eps.x.scatter_forward()
 
+    def snapshot(self) -> object:
+        return self.eps.x.array.copy(), self.in_tangent, self._relaxed_freezes
+
+    def restore(self, saved: object) -> None:
+        self.eps.x.array[:], self.in_tangent, self._relaxed_freezes = saved
+        self._solved_for = None
+
     def change(self, u: dolfinx.fem.Function) -> float:
         """||eps(u) - eps|| / ||eps(u)|| in the weighted L2 norm (collective)."""
         return self._relative(u, self._norm)

@@ -227,6 +227,16 @@ class TemperatureField:
         self.T.x.array[:] = self._mixing.step(self.T.x.array, self.solve(u).x.array)
         self.T.x.scatter_forward()
 
+    def snapshot(self) -> object:
+        return self.T.x.array.copy()
+
+    def restore(self, saved: object) -> None:
+        """T as it was, the acceleration's history dropped."""
+        self.T.x.array[:] = saved
+        self._mixing = AndersonMixing(self._mixing.comm, self._mixing.owned, self._mixing.depth,
+                                      self._mixing.damping)
+        self._solved_for = None
+
     def settle(self, u: dolfinx.fem.Function) -> None:
         """T <- T(u), the solution at u itself: a one-way computation (freeze moves T
         ``relaxation`` of the way)."""
