@@ -310,10 +310,11 @@ class SecantSolver:
             return True
         if diverging(increments):
             others = " or ".join(m for m in ("direct", "modified") if m != settings.method)
+            friction = ", a smaller friction coefficient" if self.problem.has_friction else ""
             result.reason = (f"diverging: the increment grew for 5 iterations to {increment:.3e} (outer "
                              f"{outer}, inner {inner}; last increments {_recent(increments)}){friction_note}. "
-                             f"Try the {others} method, a smaller friction coefficient or larger penalty "
-                             "parameters; see history.csv")
+                             f"Try the {others} method{friction} or larger penalty parameters; see "
+                             "history.csv")
             result.cause = "diverging"
             return True
         if stalled(increments, settings.stall_window):
