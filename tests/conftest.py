@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
 
@@ -61,6 +63,26 @@ def pytest_collection_modifyitems(config, items):
     if dropped:
         config.hook.pytest_deselected(items=dropped)
         items[:] = [item for item in items if not item.get_closest_marker(NO_PARALLEL_CONTENT)]
+
+
+@contextmanager
+def kept_figures() -> Iterator[dict]:
+    """Every matplotlib figure saved inside the block, by file name (e.g. "velocity.png"), for a
+    test to read its axes, titles and artists (rank 0 draws a run's figures)."""
+    import matplotlib.figure
+
+    saved = {}
+    original = matplotlib.figure.Figure.savefig
+
+    def keep(fig, path, **kwargs):
+        saved[Path(path).name] = fig
+        return original(fig, path, **kwargs)
+
+    matplotlib.figure.Figure.savefig = keep
+    try:
+        yield saved
+    finally:
+        matplotlib.figure.Figure.savefig = original
 
 
 @pytest.fixture

@@ -13,6 +13,7 @@ from mpi4py import MPI
 import forming_fenicsx.run as run
 import forming_fenicsx.study as study
 from forming_fenicsx.cli import main
+from forming_fenicsx.plotting import Heading
 from forming_fenicsx.study_figures import quantity_plots
 from forming_fenicsx.units import Units
 
@@ -92,10 +93,10 @@ def test_die_angle_sweep_as_a_new_user(shared_tmp, monkeypatch):
     out = shared_tmp / "angles"
 
     def at_9_degrees(draw: Callable) -> Callable:
-        """draw(data, path, title, ...) for the run titled die_angle=9 (its folder's name), else
+        """draw(data, path, heading, ...) for the run named die_angle=9 (its folder's name), else
         nothing."""
-        def drawn(data, path: Path, title: str, *rest):
-            return draw(data, path, title, *rest) if title == "die_angle=9" else []
+        def drawn(data, path: Path, heading: Heading, *rest):
+            return draw(data, path, heading, *rest) if heading.name == "die_angle=9" else []
         return drawn
 
     for name in ("write_figures", "write_die_plot"):

@@ -10,6 +10,7 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import pytest
+from conftest import kept_figures
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
@@ -27,8 +28,9 @@ REQUIRED = {"scene", "dolfinx_version", "mpi_ranks", "dofs", "converged", "linea
 
 def test_run_writes_summary_history_fields_and_figures(shared_tmp):
     out = shared_tmp / "run"
-    assert main(["run", DEMO, "--out", str(out), "--set", "friction.mu=0.1", *COARSE,
-                 "--", "-ksp_type", "preonly"]) == 0
+    with kept_figures() as figures:
+        assert main(["run", DEMO, "--out", str(out), "--set", "friction.mu=0.1", *COARSE,
+                     "--", "-ksp_type", "preonly"]) == 0
     MPI.COMM_WORLD.barrier()
     summary = json.loads((out / "summary.json").read_text())
     assert REQUIRED <= set(summary)
@@ -43,16 +45,26 @@ def test_run_writes_summary_history_fields_and_figures(shared_tmp):
     names = {a.get("Name") for a in ElementTree.parse(out / "fields.xdmf").iter("Attribute")}
     assert names == {"velocity", "equivalent_strain_rate", "hydrostatic_pressure", "secant_viscosity"}
     assert (out / "fields.h5").stat().st_size > 1000
-    for figure in ("velocity.png", "strain_rate.png"):
+    for figure in ("velocity.png", "strain_rate.png", "die.png"):
         assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    if MPI.COMM_WORLD.rank == 0:  # a converged run's figures carry no failure
+        assert sorted(figures) == ["die.png", "strain_rate.png", "velocity.png"]
+        assert not any("NOT CONVERGED" in f.axes[0].get_title() for f in figures.values())
 
 
 def test_not_converged_exits_non_zero_and_keeps_last_iterate(shared_tmp, capsys):
     out = shared_tmp / "short"
-    assert main(["run", DEMO, "--out", str(out), "--set", "solver.max_iterations=3", *COARSE]) == 3
+    with kept_figures() as figures:
+        assert main(["run", DEMO, "--out", str(out), "--set", "solver.max_iterations=3",
+                     *COARSE]) == 3
     MPI.COMM_WORLD.barrier()
     if MPI.COMM_WORLD.rank == 0:
         assert "not converged" in capsys.readouterr().err
+        # every figure says so first in its title, with the reason's first clause
+        assert sorted(figures) == ["die.png", "strain_rate.png", "velocity.png"]
+        for figure in figures.values():
+            assert figure.axes[0].get_title().startswith(
+                "NOT CONVERGED: no convergence in 3 iterations\n")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False and "3 iterations" in summary["reason"]
     assert summary["linear_solves"] == 4

@@ -172,16 +172,19 @@ def test_hot_rod_run_writes_its_temperature(shared_tmp):
     """demos/aluminium_rod_hot.toml through `forming run`'s pipeline: the temperature of the
     converged flow (one way), its exit profile and balance. The product leaves between the billet's
     450 C and the adiabatic 450 C + beta p / (rho c) (the container at 420 C takes heat); the energy
-    balance closes to 2e-3 (measured 6e-4 on the default mesh; this test's coarse one, h = 4 mm)."""
+    balance closes to 2e-3 (measured 6e-4 on the default mesh; this test's coarse one, h = 4 mm).
+    The scene's units.temperature = "C": the summary in kelvin, the CSV in kelvin and Celsius,
+    temperature.png (magma) and exit_temperature.png in Celsius."""
     import json
 
+    from conftest import kept_figures
     from forming_fenicsx.run import run_scene
     from forming_fenicsx.scene import load_scene
 
     demos = Path(__file__).resolve().parents[1] / "demos"
-    scene = load_scene(demos / "aluminium_rod_hot.toml", ["output.figures=false",
-                                                          "discretisation.mesh_size=4"])
-    summary = run_scene(scene, shared_tmp / "hot_rod")
+    scene = load_scene(demos / "aluminium_rod_hot.toml", ["discretisation.mesh_size=4"])
+    with kept_figures() as figures:
+        summary = run_scene(scene, shared_tmp / "hot_rod")
     inflow = scene.thermal.inflow_temperature
     adiabatic = inflow + 0.9 * summary["ram_pressure"] / 2.98
     assert summary["converged"]
@@ -189,11 +192,24 @@ def test_hot_rod_run_writes_its_temperature(shared_tmp):
         assert inflow < summary[key] < adiabatic, key
     assert abs(summary["energy_balance_residual"]) < 2e-3
     assert summary["units"]["quantities"]["mean_exit_temperature"] == "K"
+    assert summary["units"]["temperature"] == "K" and summary["units"]["temperature_shown"] == "C"
     written = json.loads((shared_tmp / "hot_rod" / "summary.json").read_text())
     assert written["energy_balance"]["process_power"] == pytest.approx(
         summary["ram_force"] * scene.process.velocity)
     rows = (shared_tmp / "hot_rod" / "exit_temperature.csv").read_text().splitlines()
-    assert rows[0] == "y [mm],temperature [K]" and len(rows) == 42
+    assert rows[0] == "y [mm],temperature [K],temperature [C]" and len(rows) == 42
+    kelvin, celsius = (float(value) for value in rows[1].split(",")[1:])
+    assert celsius == pytest.approx(kelvin - 273.15, abs=1e-6)
+    if MPI.COMM_WORLD.rank == 0:
+        mapped = figures["temperature.png"].axes[0].collections[0]
+        assert mapped.get_cmap().name == "magma"
+        low, high = mapped.get_clim()  # Celsius: the container's 420 C to the product's
+        assert 400 < low < 450 < high < summary["max_exit_temperature"] - 273.15 + 5
+        assert figures["temperature.png"].axes[1].get_ylabel() == "temperature [C]"
+        profile = figures["exit_temperature.png"].axes[0]
+        assert profile.get_ylabel() == "temperature [C]"
+        legend = [text.get_text() for text in profile.get_legend().get_texts()]
+        assert "inflow temperature = 450" in legend
     assert 'Name="temperature"' in (shared_tmp / "hot_rod" / "fields.xdmf").read_text()
 
 

@@ -6,11 +6,13 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from forming_fenicsx.errors import SceneError
 from forming_fenicsx.run import solve_scene
 from forming_fenicsx.scene import read_scene_data, scene_from_dict
+from forming_fenicsx.units import Units
 
 DEMOS = Path(__file__).parents[1] / "demos"
 
@@ -102,6 +104,36 @@ def test_units_are_labels_checked_for_consistency():
     run = scene_from_dict({"process": {"kind": "drawing"}, "units": {"length": "in", "stress": "psi"}})
     assert run.units.label("force_per_width") == "psi*in^2/in"
     assert run.units.label("velocity") is None  # no time unit given
+
+
+@pytest.mark.no_parallel_content  # pure Python
+def test_temperatures_and_large_stresses_as_figures_show_them():
+    """units.temperature: K or C only; kelvin shown in C in the figures and beside the kelvin
+    column of a CSV file, while summary.json stays kelvin and says so; stresses of 1.2e8 Pa shown
+    as 120 MPa, 45000 psi as 45 ksi, 250 MPa and unknown units as they are."""
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "drawing"}, "units": {"temperature": "F"}})
+    assert error.value.key == "units.temperature" and '"K" or "C"' in error.value.message
+    units = scene_from_dict({"process": {"kind": "drawing"},
+                             "units": {"length": "mm", "stress": "MPa", "temperature": "C"}}).units
+    shown, unit = units.shown("temperature", np.array([723.15, 293.15]))
+    assert unit == "C" and shown == pytest.approx([450.0, 20.0])
+    columns = units.columns("temperature", np.array([723.15]))
+    assert [(header, list(values)) for header, values in columns] == \
+        [("temperature [K]", [723.15]), ("temperature [C]", [pytest.approx(450.0)])]
+    summary = units.summary(["mean_exit_temperature"])
+    assert summary["temperature"] == "K" and summary["temperature_shown"] == "C"
+    assert summary["quantities"]["mean_exit_temperature"] == "K"
+    assert [header for header, _ in Units().columns("temperature", np.array([700.0]))] == \
+        ["temperature [K]"]  # kelvin only by default
+    assert Units(stress="Pa").shown("stress", np.array([1.2e8, 3e7])) == \
+        (pytest.approx([120.0, 30.0]), "MPa")
+    assert Units(stress="psi").shown("stress", np.array([45000.0])) == \
+        (pytest.approx([45.0]), "ksi")
+    assert Units(stress="MPa").shown("stress", np.array([250.0]))[1] == "MPa"
+    assert Units(stress="bar").shown("stress", np.array([2e5]))[1] == "bar"
+    assert Units(stress="Pa").shown("stress", np.array([1e3]), largest=2e8)[0] == \
+        pytest.approx([1e-3])  # one unit for a whole axis: its largest value decides
 
 
 @pytest.mark.parametrize("key, value", [("material.A", math.inf), ("process.velocity", -math.inf),

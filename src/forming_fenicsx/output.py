@@ -95,11 +95,13 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
     """exit_<quantity>.csv: y across the product and the quantity ``name`` (exit_profile of
     postprocess.py), the headers with their units (the strain profile is the next pass's
-    material.initial_strain_file: strain_profile.py reads it)."""
+    material.initial_strain_file: strain_profile.py reads it; a temperature in kelvin, and in
+    units.temperature beside it when that is another unit)."""
+    columns = [(units.column("y"), profile["y"]), *units.columns(name, profile["values"])]
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow([units.column("y"), units.column(name)])
-        for row in zip(profile["y"], profile["values"], strict=True):
+        writer.writerow([header for header, _ in columns])
+        for row in zip(*(values for _, values in columns), strict=True):
             writer.writerow([f"{value:.8g}" for value in row])
 
 

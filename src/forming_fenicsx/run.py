@@ -19,7 +19,7 @@ from .geometry import build_mesh
 from .newton import NewtonSolver
 from .output import (load_velocity, save_velocity, write_die_profile, write_exit_profile, write_fields,
                      write_history, write_summary)
-from .plotting import write_die_plot, write_exit_profile_plot, write_figures
+from .plotting import Heading, write_die_plot, write_exit_profile_plot, write_figures
 from .postprocess import die_profile, exit_profile, force_balance, output_fields, scalars
 from .sanity import check_run
 from .units import DIMENSIONS
@@ -165,9 +165,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
-    if scene.output.figures:
-        write_figures(problem, out, title or scene.process.kind)
     profile = die_profile(problem)
+    heading = Heading.of_run(title or scene.process.kind, scene, summary)
+    if scene.output.figures:
+        write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
     if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
         profiles.append(("exit_strain", "equivalent_strain",
@@ -182,12 +183,12 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         if comm.rank == 0:
             write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
             if scene.output.figures:
-                write_exit_profile_plot(across, out / f"{stem}.png", title or scene.process.kind, label,
+                write_exit_profile_plot(across, out / f"{stem}.png", heading, label,
                                         DIMENSIONS.get(key, ""), scene.units, reference)
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
         if scene.output.figures:
-            write_die_plot(profile, out / "die.png", title or scene.process.kind, scene)
+            write_die_plot(profile, out / "die.png", heading, scene)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
