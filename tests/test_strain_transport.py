@@ -29,7 +29,7 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import atan2, function_space
+from forming_fenicsx.compat import GHOST_MODE, atan2, function_space
 from forming_fenicsx.coordinates import CoordinateSystem
 from forming_fenicsx.strain_transport import StrainField
 from forming_fenicsx.verification import RADIAL, radial_velocity, sector_mesh
@@ -79,7 +79,7 @@ def extension_case(symmetry: str, cells: int, degree: int) -> Case:
     mesh = dolfinx.mesh.create_rectangle(MPI.COMM_WORLD, [np.array([1.0, 0.0]),
                                                           np.array([2.0, 0.5])],
                                          [cells, max(1, cells // 2)],
-                                         dolfinx.mesh.CellType.quadrilateral)
+                                         dolfinx.mesh.CellType.quadrilateral, ghost_mode=GHOST_MODE)
     k = 0.5 if symmetry == "axisymmetric" else 1.0
     mesh.geometry.x[:, 1] *= mesh.geometry.x[:, 0] ** -k
     x = ufl.SpatialCoordinate(mesh)
@@ -119,7 +119,8 @@ def parallel_case(angle: float, cells: int, degree: int) -> Case:
     """u = (cos a, sin a) on the unit square of cells x cells elements (plane strain, no strain
     rate): JUMP above y = ``step`` on the inflow side x = 0, none on the inflow side y = 0."""
     mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, cells, cells,
-                                           dolfinx.mesh.CellType.quadrilateral)
+                                           dolfinx.mesh.CellType.quadrilateral,
+                                           ghost_mode=GHOST_MODE)
     a = np.radians(angle)
     step = dolfinx.fem.Constant(mesh, 0.5)
     y = ufl.SpatialCoordinate(mesh)[1]

@@ -206,9 +206,10 @@ def _one_scotch_thread():
 def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
     or read the scene's own .msh file (geometry.mesh_file, checked when the scene was read). The
-    partition repeats from run to run (_one_scotch_thread)."""
-    from dolfinx.io import gmshio
+    partition repeats from run to run (_one_scotch_thread); its ghosts are compat.GHOST_MODE's."""
     from dolfinx.mesh import meshtags
+
+    from .compat import mesh_from_gmsh
 
     mesh_file = scene.geometry.mesh_file
     with gmsh_session():
@@ -224,7 +225,7 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
         if isinstance(outcome, SceneError):
             raise outcome
         with _one_scotch_thread():
-            mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+            mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
     if outcome is not None:  # the file's tags -> the roles' tags
         values = np.array([outcome[int(v)] for v in facet_tags.values], dtype=np.int32)
         facet_tags = meshtags(mesh, mesh.topology.dim - 1, facet_tags.indices, values)

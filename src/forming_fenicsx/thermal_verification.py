@@ -18,7 +18,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from .compat import colliding_cells, function_space
+from .compat import GHOST_MODE, colliding_cells, function_space
 from .coordinates import CoordinateSystem
 from .thermal import FrictionHeat, HeatExchange, TemperatureField, ThermalMaterial
 
@@ -30,7 +30,8 @@ def rectangle(cells: tuple[int, int], size: tuple[float, float], degree: int,
     """[0, size_x] x [0, size_y] in quadrilaterals with its sides tagged LEFT, RIGHT, BOTTOM, TOP,
     and the vector Lagrange space of ``degree`` for a prescribed velocity."""
     mesh = dolfinx.mesh.create_rectangle(comm, [np.zeros(2), np.array(size, dtype=float)],
-                                         list(cells), dolfinx.mesh.CellType.quadrilateral)
+                                         list(cells), dolfinx.mesh.CellType.quadrilateral,
+                                         ghost_mode=GHOST_MODE)
     sides = ((LEFT, lambda x: np.isclose(x[0], 0.0)), (RIGHT, lambda x: np.isclose(x[0], size[0])),
              (BOTTOM, lambda x: np.isclose(x[1], 0.0)), (TOP, lambda x: np.isclose(x[1], size[1])))
     facets = [dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for _, where in sides]

@@ -13,6 +13,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .closed_forms import radial_flow_stress_rise
+from .compat import GHOST_MODE, mesh_from_gmsh
 from .forms import FlowProblem
 from .geometry import FormingMesh
 from .scene import scene_from_dict
@@ -33,7 +34,8 @@ def channel_errors(n: float, element: str, averaging: str, cells: int,
     """L2 and H1-seminorm velocity errors on the half channel [0, 2] x [0, 1] with 2 cells x cells elements:
     exact velocity on the wall and the ends, symmetry at y = 0, the pressure gradient as a body force."""
     mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([LENGTH, HALF_HEIGHT])],
-                                         [2 * cells, cells], dolfinx.mesh.CellType.quadrilateral)
+                                         [2 * cells, cells], dolfinx.mesh.CellType.quadrilateral,
+                                         ghost_mode=GHOST_MODE)
     mesh.topology.create_connectivity(1, 2)
     scene = scene_from_dict({
         "process": {"kind": "extrusion"}, "output": {"fields": False, "figures": False},
@@ -100,7 +102,6 @@ def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> For
     elements across the angle, as many along rho): exit cap gamma1 (its velocity prescribed by the
     caller), entry cap gamma2 (free), wall gamma3 (die), axis gamma6."""
     import gmsh
-    from dolfinx.io import gmshio
 
     from .msh import gmsh_session
     from .roles import ROLES, WORKPIECE
@@ -130,7 +131,7 @@ def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> For
                 gmsh.model.addPhysicalGroup(1, [curve], ROLES[role])
             gmsh.model.mesh.generate(2)
             gmsh.model.mesh.setOrder(degree)
-        mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+        mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
     roles = {role: ROLES[role] for role in ("gamma1_velocity", "gamma2_free", "gamma3_contact",
                                            "gamma6_symmetry")}
     return FormingMesh(mesh, facet_tags, roles, [])
@@ -226,7 +227,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
 
     rate, n, length = 0.5, 0.2, 2.0
     mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([length, 1.0])], [6, 3],
-                                         dolfinx.mesh.CellType.quadrilateral)
+                                         dolfinx.mesh.CellType.quadrilateral, ghost_mode=GHOST_MODE)
     facets = {role: dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for role, where in (
         ("gamma1_velocity", lambda x: np.isclose(x[0], length)), ("gamma2_free", lambda x: np.isclose(x[0], 0)),
         ("gamma4_free", lambda x: np.isclose(x[1], 1.0)), ("gamma6_symmetry", lambda x: np.isclose(x[1], 0)))}
