@@ -17,7 +17,7 @@ from conftest import kept_figures
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.plotting import (DIE_PARTS, Heading, die_body, die_parts, flow_lines,
+from forming_fenicsx.plotting import (DIE_PARTS, MAX_GAP, Heading, die_body, die_parts, flow_lines,
                                       not_converged, run_settings, write_die_plot)
 from forming_fenicsx.run import run_scene
 
@@ -201,6 +201,22 @@ def test_time_lines_stay_straight_across_a_flow_that_speeds_up():
     for index, line in enumerate(times, start=1):
         assert np.ptp(line[:, 0]) < 1e-6
         assert line[0, 0] == pytest.approx(math.exp(0.5 * index) - 1, rel=1e-4)
+
+
+def test_time_lines_stay_connected_across_a_shear_layer():
+    """u = (1 + 20 y, 0) (linear on the two triangles): the outer layer outruns the core 21 to
+    1, as an extruded product's core outruns its surface held by friction. Seeds are added where
+    neighbouring marks drift apart, so that every time line stays within MAX_GAP band widths from
+    point to point (with the starting seeds alone the last time line's marks were 2.73 band
+    widths apart: chords that cut across the die of an extrusion)."""
+    points, triangles = SQUARE
+    band = 1.0 / 4
+    _, times = flow_lines(points, triangles,
+                          np.column_stack([1 + 20 * points[:, 1], 0 * points[:, 1]]), count=4)
+    assert len(times) == 24
+    for line in times:
+        assert np.linalg.norm(np.diff(line, axis=0), axis=1).max() <= MAX_GAP * band
+    assert len(times[-1]) == 35  # 5 with the starting seeds alone
 
 
 @pytest.mark.no_parallel_content  # pure Python: a figure from numbers
