@@ -93,9 +93,9 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 
 
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
-    """exit_<quantity>.csv: y across the product and the quantity ``name`` (exit_profile of
-    postprocess.py), the headers with their units (the strain profile is the next pass's
-    material.initial_strain_file: strain_profile.py reads it)."""
+    """exit_<quantity>.csv: y across the product and the quantity ``name`` (the ``values`` of
+    postprocess.exit_profile or exit_strain_profile), the headers with their units (the strain
+    profile is the next pass's material.initial_strain_file: strain_profile.py reads it)."""
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow([units.column("y"), units.column(name)])

@@ -9,6 +9,7 @@ import numpy as np
 from .compat import cell_geometry_nodes
 from .forms import FlowProblem
 from .postprocess import cell_means, nodal_velocity
+from .streamlines import rk4_step
 from .units import Units
 
 QUAD_OUTLINE = [0, 1, 3, 2]  # dolfinx quadrilateral vertices in tensor order -> polygon order
@@ -110,13 +111,13 @@ SUB_TRIANGLES = {4: np.array([[0, 1, 3], [0, 3, 2]]),
 
 def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray,
                count: int = FLOW_LINES, steps_per_mark: int = 20) -> tuple[list[np.ndarray], int]:
-    """Material lines of the steady flow: x' = u(x) integrated by classical Runge-Kutta (RK4) with a
-    fixed time step from ``count`` seeds at the centres of equal bands across the entry section
-    (the smallest x, y from 0 to the largest y there), u linear on the triangles through the nodes,
-    until a point leaves the workpiece or stops. Returns the lines (positions at every step; none
-    when the entry does not move) and the number of steps between time lines: marks placed every
-    2 (band width)/U_entry in time, which start as a grid of 1 x 2 bands at the entry and show its
-    distortion, as grid markers do."""
+    """Material lines of the steady flow: x' = u(x) integrated by classical Runge-Kutta
+    (streamlines.rk4_step) with a fixed time step from ``count`` seeds at the centres of equal
+    bands across the entry section (the smallest x, y from 0 to the largest y there), u linear on
+    the triangles through the nodes, until a point leaves the workpiece or stops. Returns the
+    lines (positions at every step; none when the entry does not move) and the number of steps
+    between time lines: marks placed every 2 (band width)/U_entry in time, which start as a grid
+    of 1 x 2 bands at the entry and show its distortion, as grid markers do."""
     from matplotlib.tri import LinearTriInterpolator, Triangulation
 
     mesh = Triangulation(points[:, 0], points[:, 1], triangles)
@@ -143,12 +144,8 @@ def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray,
     for _ in range(limit):
         if not alive.any():
             break
-        k1 = u(x)
-        k2 = u(x + 0.5 * dt * k1)
-        k3 = u(x + 0.5 * dt * k2)
-        k4 = u(x + dt * k3)
-        step = dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        x = x + step
+        moved = rk4_step(u, x, dt)
+        step, x = moved - x, moved
         alive &= np.isfinite(x).all(axis=1) & (np.abs(step).max(axis=1) > 1e-9 * fastest * dt)
         for i in np.flatnonzero(alive):
             lines[i].append(x[i])
@@ -255,19 +252,26 @@ def write_exit_profile_plot(profile: dict, path: Path, title: str, label: str, d
                            units: Units, reference: tuple[str, float] | None = None) -> Path:
     """exit_<quantity>.png: a quantity across the product against y (the hardness or temperature
     profile), with a reference level (``(label, value)``: the ideal strain, the inflow
-    temperature); a profile with ``surface_cell`` has the element at the surface shaded (the
-    strain's fall there is the mesh's: docs/hardening.md, known limits)."""
+    temperature); the strain's profile (postprocess.exit_strain_profile) also shows the strain
+    traced along the streamlines and the transported field, and shades the outermost elements,
+    across which the written profile takes its mean (docs/hardening.md)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(profile["y"], profile["values"], "b.-", label=f"FE {label}")
-    if "surface_cell" in profile:  # a layer there (the friction shear) is not resolved
+    strain = "surface_layer" in profile
+    if strain:  # a layer at the surface is not resolved
         surface = profile["y"][-1]
-        ax.axvspan(surface - profile["surface_cell"], surface, color="0.88",
-                   label="the element at the surface: a layer there is not resolved")
+        ax.axvspan(surface - profile["surface_layer"], surface, color="0.88",
+                   label="the outermost elements: the written value is their mean")
+        ax.plot(profile["y"], profile["transported"], "--", color="tab:orange",
+                label=f"transported {label} (FE field)")
+        ax.plot(profile["y"], profile["streamlines"], "-", color="0.5", linewidth=0.8,
+                label=f"{label} along the streamlines")
+    ax.plot(profile["y"], profile["values"], "b.-",
+            label=f"{label}: the written profile (CSV)" if strain else f"FE {label}")
     if reference is not None:
         ax.axhline(reference[1], color="k", linestyle="--", label=f"{reference[0]} = {reference[1]:.4g}")
     ax.set_xlabel(units.labelled("y, from the axis to the surface of the product", "length"))
