@@ -5,6 +5,8 @@ Prints each pass's drawing stress, mean exit strain, redundant-work factor, the 
 stress and the drawing stress over it (the drawn wire yields at 1).
 
 Run: mpirun -n 2 .venv/bin/python demos/copper_wire_schedule.py [--out results/copper_schedule]
+The same passes of another scene (the steel wire of docs/hardening.md):
+     demos/copper_wire_schedule.py --scene demos/steel_wire_pass.toml --out results/steel_schedule
 """
 from __future__ import annotations
 
@@ -24,26 +26,28 @@ COLUMNS = ("drawing_stress", "mean_entry_strain", "mean_exit_strain", "redundant
            "product_flow_stress", "product_yield_ratio", "linear_solves")
 
 
-def run_schedule(out: Path, overrides: list[str] | None = None) -> list[dict]:
-    """Run the passes in order into out/pass1, out/pass2, ...; returns their summaries."""
+def run_schedule(out: Path, overrides: list[str] | None = None, scene: Path = SCENE) -> list[dict]:
+    """Run the passes of ``scene`` in order into out/pass1, out/pass2, ...; returns their
+    summaries."""
     summaries = []
     for number, (entry, exit_) in enumerate(zip(DIAMETERS, DIAMETERS[1:]), start=1):
         settings = [f"geometry.entry_diameter={entry}", f"geometry.exit_diameter={exit_}",
                     *(overrides or [])]
         if summaries:
             settings.append(f"material.initial_strain_file=\"{out / f'pass{number - 1}' / 'exit_strain.csv'}\"")
-        scene = load_scene(SCENE, settings)
-        summaries.append(run_scene(scene, out / f"pass{number}", title=f"pass {number}",
-                                   overwrite=True))
+        summaries.append(run_scene(load_scene(scene, settings), out / f"pass{number}",
+                                   title=f"pass {number}", overwrite=True))
     return summaries
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results/copper_schedule")
+    parser.add_argument("--scene", type=Path, default=SCENE,
+                        help="the pass (its diameters replaced)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.WARNING)
-    summaries = run_schedule(Path(args.out))
+    summaries = run_schedule(Path(args.out), scene=args.scene)
     if MPI.COMM_WORLD.rank == 0:
         rows = [[f"{d0} -> {d1} mm", *(f"{s[c]:.4g}" for c in COLUMNS)]
                 for d0, d1, s in zip(DIAMETERS, DIAMETERS[1:], summaries)]

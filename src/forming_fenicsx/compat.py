@@ -139,16 +139,25 @@ def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degre
     return dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([velocity, pressure]))
 
 
-def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
-    """For each point (shape (N, 3)), a local cell (owned or ghost) that contains it, or -1."""
+def bounding_box_tree(mesh):
+    """The bounding-box tree of the mesh's local cells (owned and ghost), for colliding_cells."""
     import dolfinx.geometry as geometry
 
     tdim = mesh.topology.dim
     if LEGACY:
-        tree = geometry.BoundingBoxTree(mesh, tdim)
+        return geometry.BoundingBoxTree(mesh, tdim)
+    return geometry.bb_tree(mesh, tdim)
+
+
+def colliding_cells(mesh, points: np.ndarray, tree=None) -> np.ndarray:
+    """For each point (shape (N, 3)), a local cell (owned or ghost) that contains it, or -1;
+    ``tree`` a bounding_box_tree of the mesh to reuse (else one is built)."""
+    import dolfinx.geometry as geometry
+
+    tree = bounding_box_tree(mesh) if tree is None else tree
+    if LEGACY:
         candidates = geometry.compute_collisions(tree, points)
     else:
-        tree = geometry.bb_tree(mesh, tdim)
         candidates = geometry.compute_collisions_points(tree, points)
     colliding = geometry.compute_colliding_cells(mesh, candidates, points)
     offsets = np.asarray(colliding.offsets)
@@ -156,6 +165,17 @@ def colliding_cells(mesh, points: np.ndarray) -> np.ndarray:
     hit = offsets[1:] > offsets[:-1]
     cells[hit] = np.asarray(colliding.array)[offsets[:-1][hit]]  # the first colliding cell of each
     return cells
+
+
+def closest_cells(mesh, points: np.ndarray, tree, midpoints) -> tuple[np.ndarray, np.ndarray]:
+    """For each point (N, 3), the local cell nearest to it and the squared distance to that cell's
+    nodes' convex hull; ``midpoints`` the tree of the cells' midpoints
+    (geometry.create_midpoint_tree, the same in both releases)."""
+    import dolfinx.geometry as geometry
+
+    cells = np.asarray(geometry.compute_closest_entity(tree, midpoints, mesh, points),
+                       dtype=np.int32)
+    return cells, np.asarray(geometry.squared_distance(mesh, mesh.topology.dim, cells, points))
 
 
 def atan2(y, x):

@@ -8,9 +8,11 @@ kinematics and the measures' weight come from the scene's coordinate system (coo
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import numpy as np
 import ufl
 from petsc4py import PETSc
 
@@ -101,13 +103,18 @@ class FlowProblem:
         # with the other coefficients; none for a law of the rate alone
         self.strain_field: StrainField | None = None
         self.strain = None
+        # the strain flowing in at points (N, 2) of the entry (streamlines.streamline_strain)
+        self.entry_strain: Callable[[np.ndarray], np.ndarray] | None = None
         if scene.material.hardens:
-            inflow = scene.material.initial_strain
+            initial = inflow = scene.material.initial_strain
+            self.entry_strain = lambda points: np.full(len(points), initial)
             if scene.material.initial_strain_file is not None:  # a profile across the entry
-                inflow = strain_profile.inflow_strain(
-                    mesh, disc.degree, strain_profile.read_strain_profile(
-                        scene.material.initial_strain_file, "material.initial_strain_file"),
-                    scene.geometry.entry_thickness / 2)
+                profile = strain_profile.read_strain_profile(scene.material.initial_strain_file,
+                                                             "material.initial_strain_file")
+                half = scene.geometry.entry_thickness / 2
+                inflow = strain_profile.inflow_strain(mesh, disc.degree, profile, half)
+                self.entry_strain = lambda points: strain_profile.profile_values(
+                    profile, np.abs(points[:, 1]), half)
             # the relaxed step alone for the secant methods, then the strain in the tangent for
             # Newton (strain_tangent.py): a secant iterate is not converged for the frozen strain
             self.strain_field = StrainField(

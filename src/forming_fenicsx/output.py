@@ -93,10 +93,10 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 
 
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
-    """exit_<quantity>.csv: y across the product and the quantity ``name`` (exit_profile of
-    postprocess.py), the headers with their units (the strain profile is the next pass's
-    material.initial_strain_file: strain_profile.py reads it; a temperature in kelvin, and in
-    units.temperature beside it when that is another unit)."""
+    """exit_<quantity>.csv: y across the product and the quantity ``name`` (the ``values`` of
+    postprocess.exit_profile or exit_strain_profile), the headers with their units (the strain
+    profile is the next pass's material.initial_strain_file: strain_profile.py reads it; a
+    temperature in kelvin, and in units.temperature beside it when that is another unit)."""
     columns = [(units.column("y"), profile["y"]), *units.columns(name, profile["values"])]
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)

@@ -18,6 +18,7 @@ import numpy as np
 from .compat import cell_geometry_nodes
 from .forms import FlowProblem
 from .postprocess import cell_means, nodal_velocity
+from .streamlines import rk4_step
 from .units import Units, bracketed
 
 QUAD_OUTLINE = [0, 1, 3, 2]  # dolfinx quadrilateral vertices in tensor order -> polygon order
@@ -341,12 +342,8 @@ def flow_lines(points: np.ndarray, triangles: np.ndarray, velocity: np.ndarray,
         for _ in range(limit):
             if not alive.any():
                 break
-            k1 = u(x)
-            k2 = u(x + 0.5 * dt * k1)
-            k3 = u(x + 0.5 * dt * k2)
-            k4 = u(x + dt * k3)
-            step = dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            x = x + step
+            moved = rk4_step(u, x, dt)
+            step, x = moved - x, moved
             alive &= np.isfinite(x).all(axis=1) & (np.abs(step).max(axis=1) > 1e-9 * fastest * dt)
             for i in np.flatnonzero(alive):
                 paths[i].append(x[i])
@@ -455,16 +452,23 @@ def write_exit_profile_plot(profile: dict, path: Path, heading: Heading, label: 
                             reference: tuple[str, float] | None = None) -> Path:
     """exit_<quantity>.png: a quantity across the product against y (the hardness or temperature
     profile; temperatures in units.temperature), with a reference level (``(label, value)``: the
-    ideal strain, the inflow temperature); a profile with ``surface_cell`` has the element at the
-    surface shaded (the strain's fall there is the mesh's: docs/hardening.md, known limits)."""
+    ideal strain, the inflow temperature); the strain's profile (postprocess.exit_strain_profile)
+    also shows the strain traced along the streamlines and the transported field, and shades the
+    outermost elements, across which the written profile takes its mean (docs/hardening.md)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     values, unit = units.shown(dimension, profile["values"])
-    ax.plot(profile["y"], values, "b.-", label=f"FE {label}")
-    if "surface_cell" in profile:  # a layer there (the friction shear) is not resolved
+    strain = "surface_layer" in profile
+    if strain:  # a layer at the surface is not resolved
         surface = profile["y"][-1]
-        ax.axvspan(surface - profile["surface_cell"], surface, color="0.88",
-                   label="the element at the surface: a layer there is not resolved")
+        ax.axvspan(surface - profile["surface_layer"], surface, color="0.88",
+                   label="the outermost elements: the written value is their mean")
+        ax.plot(profile["y"], profile["transported"], "--", color="tab:orange",
+                label=f"transported {label} (FE field)")
+        ax.plot(profile["y"], profile["streamlines"], "-", color="0.5", linewidth=0.8,
+                label=f"{label} along the streamlines")
+    ax.plot(profile["y"], values, "b.-",
+            label=f"{label}: the written profile (CSV)" if strain else f"FE {label}")
     if reference is not None:
         level = float(units.shown(dimension, reference[1])[0])
         ax.axhline(level, color="k", linestyle="--", label=f"{reference[0]} = {level:.4g}")

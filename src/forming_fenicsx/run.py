@@ -20,7 +20,8 @@ from .newton import NewtonSolver
 from .output import (load_velocity, save_velocity, write_die_profile, write_exit_profile, write_fields,
                      write_history, write_summary)
 from .plotting import Heading, write_die_plot, write_exit_profile_plot, write_figures
-from .postprocess import die_profile, exit_profile, force_balance, output_fields, scalars
+from .postprocess import (die_profile, exit_profile, exit_strain_profile, force_balance,
+                          output_fields, scalars)
 from .sanity import check_run
 from .units import DIMENSIONS
 from .scene import Scene
@@ -172,7 +173,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
     if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
         profiles.append(("exit_strain", "equivalent_strain",
-                         exit_profile(problem, problem.strain, surface_cell=True),
+                         exit_strain_profile(problem),
                          "equivalent strain", ("entry strain + ideal ln(A0/A1)",
                                                summary["mean_entry_strain"] + summary["ideal_strain"])))
     if problem.temperature_field is not None:  # [thermal]: the product's temperature profile

@@ -11,8 +11,9 @@ from __future__ import annotations
 import dolfinx.fem
 import numpy as np
 
-from .compat import colliding_cells, function_space
+from .compat import function_space
 from .forms import FlowProblem
+from .points import PointValues
 from .postprocess import cell_means
 from .projection import project_discontinuous
 
@@ -23,20 +24,11 @@ def values_at(problem: FlowProblem, expr, points: np.ndarray, degree: int) -> np
     the same array on every rank (collective). A point outside the workpiece raises ValueError."""
     target = dolfinx.fem.Function(function_space(problem.mesh, "DP", degree))
     project_discontinuous(expr, target, problem.full_degree)
-    padded = np.zeros((len(points), 3))
-    padded[:, :2] = points
-    cells = colliding_cells(problem.mesh, padded)
-    found = cells >= 0
-    local = np.zeros(len(points))
-    if found.any():
-        local[found] = target.eval(padded[found], cells[found]).ravel()
-    # a point on a partition boundary lies in cells of several ranks (the values agree): average
-    total = problem.comm.allreduce(local)
-    count = problem.comm.allreduce(found.astype(float))
-    if (count == 0).any():
-        outside = points[count == 0][0]
+    values = PointValues([target]).evaluate(points)[0][:, 0]
+    if np.isnan(values).any():
+        outside = points[np.isnan(values)][0]
         raise ValueError(f"the point ({outside[0]:.6g}, {outside[1]:.6g}) is not in the workpiece")
-    return total / count
+    return values
 
 
 def mean_axial_stress(problem: FlowProblem, x: float, radius: float, points: int = 24) -> float:

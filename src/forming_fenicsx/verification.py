@@ -154,19 +154,13 @@ def radial_hardening_stress_rise(symmetry: str, law, points: int = 200) -> float
     return float((rho0 - rho1) / 2 * np.sum(weights * factor * sigma / rho))
 
 
-def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
-                comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
-                tolerance: float = 1e-8) -> dict[str, float]:
-    """Drawing through the smooth cone or wedge: the exit cap pulled at the exact velocity, the entry
-    cap free (the exact sigma_rr is taken zero there), the wall a frictionless die, the Norton law
-    sigma = K rate^n (or the scene ``material`` given, e.g. a hardening law, whose strain is then
-    transported and coupled). Returns the L2 and H1-seminorm velocity errors (relative to the exact
-    field's norms) and the mean axial stress on the exit cap, F / (pi rho1^2 sin^2 alpha) (cone) or
-    F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise, or
-    radial_hardening_stress_rise), and with a hardening law the mean exit strain beside the exact
-    eps0 + ln(A0/A1)."""
-    from .postprocess import mean_strain_through, reaction_on
-
+def radial_problem(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
+                   comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
+                   tolerance: float = 1e-8) -> FlowProblem:
+    """Drawing through the smooth cone or wedge, to be solved by ``method``: the exit cap pulled at
+    the exact velocity, the entry cap free (the exact sigma_rr is taken zero there), the wall a
+    frictionless die, the Norton law sigma = K rate^n (or the scene ``material`` given, e.g. a
+    hardening law, whose strain is then transported and coupled)."""
     forming_mesh = sector_mesh(cells, int(element[1]), comm)
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": RADIAL["U"]},
@@ -185,6 +179,21 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
     axis_dofs = problem.boundary_dofs("gamma6_symmetry", 1)
     problem.bcs[:] = [dolfinx.fem.dirichletbc(exit_velocity, dolfinx.fem.locate_dofs_topological(
         problem.V, 1, exit_facets)), dolfinx.fem.dirichletbc(PETSc.ScalarType(0), axis_dofs, problem.V.sub(1))]
+    return problem
+
+
+def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
+                comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
+                tolerance: float = 1e-8) -> dict[str, float]:
+    """The radial_problem solved by ``method``. Returns the L2 and H1-seminorm velocity errors
+    (relative to the exact field's norms) and the mean axial stress on the exit cap, F / (pi rho1^2
+    sin^2 alpha) (cone) or F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1)
+    (radial_stress_rise, or radial_hardening_stress_rise), and with a hardening law the mean exit
+    strain beside the exact eps0 + ln(A0/A1)."""
+    from .postprocess import mean_strain_through, reaction_on
+
+    problem = radial_problem(symmetry, n, element, cells, method, comm, material, tolerance)
+    scene = problem.scene
     solver = (NewtonSolver if method == "newton" else SecantSolver)(problem)
     result = solver.solve()
     solver.destroy()
