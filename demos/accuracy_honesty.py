@@ -19,12 +19,12 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from forming_fenicsx.accuracy import estimate, relative, solve_to_accuracy
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import load_scene
-from forming_fenicsx.study import exact_value
-from forming_fenicsx.verification import radial_flow
+from forming_fenicsx.solvers.accuracy import estimate, relative, solve_to_accuracy
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.app.study import exact_value
+from forming_fenicsx.verification.verification import radial_flow
 
 DEMOS = Path(__file__).parent
 NEWTON = ["solver.method=newton", "discretisation.averaging=quadrature", "output.fields=false",

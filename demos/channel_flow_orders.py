@@ -7,8 +7,8 @@
 # the quadrature points.
 from mpi4py import MPI
 
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.verification import channel_orders
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.verification.verification import channel_orders
 
 rows = []
 for n in (0.3, 0.5, 1.0):

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from forming_fenicsx.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
+from forming_fenicsx.physics.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
                                           avitzur_optimum_angle_approx, sachs_drawing_stress)
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import scene_from_dict
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import scene_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 ANGLES = (4.0, 6.0, 8.0, 10.0, 15.0, 20.0, 30.0)

@@ -14,10 +14,10 @@ import shutil
 import sys
 from pathlib import Path
 
-from forming_fenicsx.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
+from forming_fenicsx.physics.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
                                           strip_optimum_angle, upper_bound_strip_drawing_stress)
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.study import load_study, study_scenes
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.study import load_study, study_scenes
 
 DEMOS = Path(__file__).parent
 CASES = ("strip_die_angle", "wire_die_angle")

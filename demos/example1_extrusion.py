@@ -19,8 +19,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import SceneError, load_scene
-from forming_fenicsx.cli import configure_logging
-from forming_fenicsx.run import run_scene
+from forming_fenicsx.app.cli import configure_logging
+from forming_fenicsx.app.run import run_scene
 
 HILL_RAM_PRESSURE = 1.0 + math.pi / 2.0  # slip-line solution, in units of k
 

@@ -12,9 +12,9 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.postprocess import ram_face_pressure_model
-from forming_fenicsx.report import markdown_table, richardson
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.post.postprocess import ram_face_pressure_model
+from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.app.run import solve_scene
 
 HILL = 1 + math.pi / 2
 parser = argparse.ArgumentParser()

@@ -6,7 +6,7 @@
 # brackets the die pressure of the rigid-perfectly plastic strip (k = A/sqrt(3), the limit alpha -> 0
 # of (4.5)) with the same geometry and boundary conditions as the finite element runs, mu = 0: a
 # lower bound from an equilibrium stress field and an upper bound from an incompressible velocity
-# field, both optimised by linear programming (`forming_fenicsx.limit_analysis`). Each size pair is
+# field, both optimised by linear programming (`forming_fenicsx.verification.limit_analysis`). Each size pair is
 # "smallest:largest" element size. It runs for the paper's reduction and for the reduction where
 # Hill's slip-line field is exact (q = 182.74), a check of both bounds. Serial; docs/example2.md
 # shows a run.
@@ -18,9 +18,9 @@ import math
 from pathlib import Path
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.limit_analysis import lower_bound, upper_bound
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.study import exact_value
+from forming_fenicsx.verification.limit_analysis import lower_bound, upper_bound
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.study import exact_value
 
 DEMOS = Path(__file__).parent
 CASES = [("paper (quoted slip-line q = 250)", DEMOS / "example2_drawing.toml", 250.0),

@@ -16,8 +16,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.cli import configure_logging
-from forming_fenicsx.run import run_scene
+from forming_fenicsx.app.cli import configure_logging
+from forming_fenicsx.app.run import run_scene
 
 PAPER = {"example2_drawing": 243.0, "example2_drawing_mu02": 255.0, "example2_drawing_mu04": 273.0}
 

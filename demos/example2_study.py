@@ -12,8 +12,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.report import markdown_table, richardson
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.app.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
 SLIP_LINE_Q = 250.0

@@ -20,9 +20,9 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.postprocess import cell_means
-from forming_fenicsx.report import markdown_table, richardson
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.fem.projection import cell_means
+from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.app.run import solve_scene
 
 DEMOS = Path(__file__).parent
 CASES = [("Example 1, h = 0.25", DEMOS / "example1_extrusion.toml", ["discretisation.mesh_size=0.25"], 1e-3),
@@ -36,7 +36,7 @@ COMMON = ["solver.method=direct", "solver.force_tolerance=1e-3", "solver.max_ite
 
 def pressure_means(problem) -> np.ndarray:
     """Element means of -sigma_H, gathered on every rank in cell order of the original mesh input."""
-    means = cell_means(problem, -problem.hydrostatic_stress(), "pressure", problem.full_degree)
+    means = cell_means(problem.mesh, -problem.hydrostatic_stress(), "pressure", problem.full_degree)
     cells = problem.mesh.topology.index_map(problem.mesh.topology.dim).size_local
     original = problem.mesh.topology.original_cell_index[:cells]
     order = np.concatenate(problem.comm.allgather(original))

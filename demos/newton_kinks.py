@@ -20,10 +20,10 @@ from mpi4py import MPI
 import dolfinx.fem
 
 from forming_fenicsx import contact, load_scene
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import NewtonSolver
-from forming_fenicsx.report import markdown_table
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.core.report import markdown_table
 
 parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--scene", default=str(Path(__file__).parent / "example1_extrusion.toml"))
@@ -33,7 +33,7 @@ args = parser.parse_args()
 comm = MPI.COMM_WORLD
 scene = load_scene(args.scene, ["solver.method=newton", "discretisation.averaging=quadrature",
                                 f"discretisation.mesh_size={args.mesh_size}"])
-problem = FlowProblem(scene, build_mesh(scene, comm))
+problem = coupled_problem(scene, build_mesh(scene, comm))
 u, last = problem.u, problem.u.copy()
 
 

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from forming_fenicsx.closed_forms import avitzur_cone_factor, shield_cone_factor
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import scene_from_dict
-from forming_fenicsx.sections import mean_axial_stress
+from forming_fenicsx.physics.closed_forms import avitzur_cone_factor, shield_cone_factor
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.post.sections import mean_axial_stress
 
 ROOT = Path(__file__).resolve().parents[1]
 # the (angle, m) pairs of the reference's table of Shield's c/2, on a bar of radius 1 to 0.5 with

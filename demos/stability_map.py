@@ -16,9 +16,9 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.run import solve_scene
 
 DEMOS = Path(__file__).parent
 EX1 = (DEMOS / "example1_extrusion.toml", ["discretisation.mesh_size=0.5", "solver.method=direct"])

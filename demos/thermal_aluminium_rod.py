@@ -20,10 +20,10 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import function_space
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import read_scene_data, scene_from_dict
-from forming_fenicsx.thermal import ThermalMaterial, effusivity_share
+from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import read_scene_data, scene_from_dict
+from forming_fenicsx.coupled.thermal import ThermalMaterial, effusivity_share
 
 KELVIN = 273.15
 conductivity = float(sys.argv[2]) if len(sys.argv) > 2 else 201.0
@@ -35,7 +35,7 @@ data["thermal"] = {"heat_capacity": 2.98, "conductivity": conductivity, "heat_fr
                    "air_temperature": 20 + KELVIN, "friction_share": share}
 scene = scene_from_dict(data)
 problem, result, summary = solve_scene(scene)
-field = problem.temperature_field  # T of the final flow, one way (solve_scene settled it)
+field = problem.field("temperature")  # T of the final flow, one way (solve_scene settled it)
 ram_power = summary["ram_force"] * scene.process.velocity
 balance = field.energy_balance(ram_power)
 leaving = ufl.dot(field.velocity, field.n)

@@ -7,8 +7,8 @@
 # adiabatic limit of the smooth cone and wedge flows with the heat balances.
 from mpi4py import MPI
 
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.thermal_verification import adiabatic, layer, manufactured, orders
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.verification.thermal_verification import adiabatic, layer, manufactured, orders
 
 tables = []
 for cells in (20, 5):

@@ -9,9 +9,9 @@
 #
 #     .venv/bin/python demos/unit_systems.py
 
-from forming_fenicsx.report import markdown_table
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import Scene, scene_from_dict
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import Scene, scene_from_dict
 
 PSI = 6894.757293168361  # Pa
 # the unit system: (its length unit in mm, its stress unit in MPa, labels)
@@ -46,7 +46,7 @@ def dimensionless(kind: str, system: str, velocity: float) -> tuple[float, float
 if __name__ == "__main__":
     from mpi4py import MPI
 
-    from forming_fenicsx.cli import configure_logging
+    from forming_fenicsx.app.cli import configure_logging
 
     configure_logging(quiet=True, rank=MPI.COMM_WORLD.rank)
     rows = []

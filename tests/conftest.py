@@ -10,7 +10,7 @@ from types import ModuleType
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.scene import Scene, scene_from_dict
+from forming_fenicsx.config.scene import Scene, scene_from_dict
 
 
 # The mark `no_parallel_content`: a test whose work does not depend on the number of ranks of the
@@ -120,7 +120,7 @@ def solved(**sections) -> dict:
     """Summary of Example 1 on the coarse mesh with the given section overrides, solved once per
     session: overrides that resolve to the same scene (a value given at its default, e.g. d_T = 1e-6
     or the exit thickness 5) share one solve."""
-    from forming_fenicsx.run import solve_scene
+    from forming_fenicsx.app.run import solve_scene
 
     sections["discretisation"] = {**COARSE, **sections.get("discretisation", {})}
     scene = make_scene(**sections)

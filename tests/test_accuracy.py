@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.accuracy import (FACTOR, MIN_ORDER, estimate, next_mesh_size, observed_order,
+from forming_fenicsx.solvers.accuracy import (FACTOR, MIN_ORDER, estimate, next_mesh_size, observed_order,
                                       relative)
-from forming_fenicsx.cli import accuracy_override, main
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.scene import load_scene
-from forming_fenicsx.transfer import transfer
+from forming_fenicsx.app.cli import accuracy_override, main
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.mesh.transfer import transfer
 
 from conftest import make_scene
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.anderson import AndersonMixing
+from forming_fenicsx.core.anderson import AndersonMixing
 
 SIZE = 12
 CONTRACTION = np.linspace(0.1, 0.9, SIZE)  # plain iteration: error ~ 0.9^k

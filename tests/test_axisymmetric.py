@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from conftest import make_scene
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.limit_analysis import strip_triangulation
-from forming_fenicsx.verification import homogeneous_extension, radial_flow
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.verification.limit_analysis import strip_triangulation
+from forming_fenicsx.verification.verification import homogeneous_extension, radial_flow
 
 
 @pytest.mark.parametrize("element, method, formulation", [

@@ -8,7 +8,7 @@ import sys
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.bench import compare, median_run, run_case
+from forming_fenicsx.app.bench import compare, median_run, run_case
 
 
 def test_run_case_in_process_gives_a_full_row():
@@ -28,7 +28,7 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
         env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                    OMPI_MCA_rmaps_base_oversubscribe="1", PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
-        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.cli", "bench", "--examples", "1", "--sizes",
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "bench", "--examples", "1", "--sizes",
                                "1.0", "--methods", "direct", "newton", "--repeat", "2", "--out", str(out)],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]

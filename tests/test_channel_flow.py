@@ -3,7 +3,7 @@ at quadrature points gives the optimal orders (Q1: 2 and 1, Q2: 3 and 2); averag
 the paper does, limits Q2 to about first order in H1."""
 import pytest
 
-from forming_fenicsx.verification import channel_orders
+from forming_fenicsx.verification.verification import channel_orders
 
 
 @pytest.mark.parametrize("n", [0.3, 0.5, 1.0])

@@ -10,12 +10,12 @@ import matplotlib.figure
 import pytest
 from mpi4py import MPI
 
-import forming_fenicsx.run as run
-import forming_fenicsx.study as study
-from forming_fenicsx.cli import main
-from forming_fenicsx.plotting import Heading
-from forming_fenicsx.study_figures import quantity_plots
-from forming_fenicsx.units import Units
+import forming_fenicsx.app.run as run
+import forming_fenicsx.app.study as study
+from forming_fenicsx.app.cli import main
+from forming_fenicsx.io.plotting import Heading
+from forming_fenicsx.app.study.figures import quantity_plots
+from forming_fenicsx.core.units import Units
 
 DEMOS = Path(__file__).parents[1] / "demos"
 
@@ -157,7 +157,7 @@ def test_mean_exit_strain_balances_the_drawing_work():
     0.9967 at h = 0.2 exit half-thicknesses), and the mean exit strain exceeds the homogeneous
     (2/sqrt3) ln(h0/h1) = 0.2577 by the redundant shear (measured 0.2984)."""
     from forming_fenicsx import load_scene
-    from forming_fenicsx.run import solve_scene
+    from forming_fenicsx.app.run import solve_scene
 
     scene = load_scene(DEMOS / "strip_mm.toml", ["discretisation.mesh_size_relative=0.2",
                                                   "friction.mu=0"])

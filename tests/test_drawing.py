@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.cli import main
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.app.cli import main
+from forming_fenicsx.app.run import solve_scene
 
 from conftest import make_scene
 

@@ -17,9 +17,9 @@ from conftest import kept_figures
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.plotting import (DIE_PARTS, MAX_GAP, Heading, die_body, die_parts, flow_lines,
+from forming_fenicsx.io.plotting import (DIE_PARTS, MAX_GAP, Heading, die_body, die_parts, flow_lines,
                                       not_converged, run_settings, write_die_plot)
-from forming_fenicsx.run import run_scene
+from forming_fenicsx.app.run import run_scene
 
 DEMOS = Path(__file__).parents[1] / "demos"
 FIELDS = {"velocity": 3, "equivalent_strain_rate": 1, "hydrostatic_pressure": 1,
@@ -299,8 +299,8 @@ def test_surface_cell_depth_is_the_exit_element():
     """The cold rod demo's mesh (h 1.2 mm): ceil(10 / 1.2) = 9 elements through the radius, so
     the element at the product's surface (exit radius 6 mm) is 6/9 mm deep; exit_strain.png
     shades it."""
-    from forming_fenicsx.geometry import build_mesh
-    from forming_fenicsx.postprocess import surface_cell_depth
+    from forming_fenicsx.mesh.geometry import build_mesh
+    from forming_fenicsx.post.postprocess import surface_cell_depth
 
     scene = load_scene(Path(__file__).parents[1] / "demos" / "aluminium_rod_cold.toml")
     g = scene.geometry

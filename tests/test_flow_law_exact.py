@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import FormingMesh
-from forming_fenicsx.postprocess import cell_means
-from forming_fenicsx.solvers import SecantSolver
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.mesh.geometry import FormingMesh
+from forming_fenicsx.fem.projection import cell_means
+from forming_fenicsx.solvers.solvers import SecantSolver
 
 from conftest import make_scene
 
@@ -42,7 +42,7 @@ def solve_box(material: dict, element: str, averaging: str, exact) -> FlowProble
 
 def cell_values(problem: FlowProblem, expr) -> np.ndarray:
     owned = problem.mesh.topology.index_map(2).size_local
-    return cell_means(problem, expr, "check", problem.full_degree).x.array[:owned]
+    return cell_means(problem.mesh, expr, "check", problem.full_degree).x.array[:owned]
 
 
 @pytest.mark.parametrize("law", LAWS)

@@ -6,19 +6,19 @@ import pytest
 import ufl
 from petsc4py import PETSc
 
-from forming_fenicsx.compat import petsc_vec
-from forming_fenicsx.forms import FlowProblem, SplitForm
-from forming_fenicsx.measures import quadrature_degree
-from forming_fenicsx.newton_forms import newton_forms
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.solvers import SecantSolver
+from forming_fenicsx.core.compat import petsc_vec
+from forming_fenicsx.fem.forms import FlowProblem, SplitForm
+from forming_fenicsx.fem.measures import quadrature_degree
+from forming_fenicsx.fem.newton_forms import newton_forms
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.solvers import SecantSolver
 
 from conftest import make_scene, solved
 
 
 def problem_for(**sections) -> FlowProblem:
     scene = make_scene(discretisation={"mesh_size": 1.0}, **sections)
-    return FlowProblem(scene, build_mesh(scene))
+    return coupled_problem(scene, build_mesh(scene))
 
 
 def test_no_friction_term_at_zero_friction():
@@ -104,7 +104,7 @@ def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
                        discretisation={"mesh_size": 0.5, "element": element, "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},
                        solver={"method": "direct", "tolerance": 1e-2})
-    problem = FlowProblem(scene, build_mesh(scene))
+    problem = coupled_problem(scene, build_mesh(scene))
     SecantSolver(problem).solve()
     problem.update_state(problem.u, frozen_too=True)
     forms = newton_forms(problem)

@@ -8,10 +8,10 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import cell_geometry_nodes, original_cell_index
-from forming_fenicsx.geometry import build_mesh, graded_edge, write_msh
-from forming_fenicsx.roles import ROLES
-from forming_fenicsx.verification import sector_mesh
+from forming_fenicsx.core.compat import cell_geometry_nodes, original_cell_index
+from forming_fenicsx.mesh.geometry import build_mesh, graded_edge, write_msh
+from forming_fenicsx.core.roles import ROLES
+from forming_fenicsx.verification.verification import sector_mesh
 
 from conftest import make_scene
 

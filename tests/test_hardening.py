@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from forming_fenicsx.scene import scene_from_dict
-from forming_fenicsx.verification import radial_flow, radial_hardening_stress_rise
+from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.verification.verification import radial_flow, radial_hardening_stress_rise
 
 LAWS = {"hollomon": {"law": "hollomon", "K": 1.0, "n": 0.3},
         "swift": {"law": "swift", "K": 1.0, "n": 0.3, "prestrain": 0.02},
@@ -69,7 +69,7 @@ def test_wedge_with_hardening(law):
 
 def test_strain_profile_file_is_checked(tmp_path):
     """material.initial_strain_file: refused by row and key, and when it does not span the entry."""
-    from forming_fenicsx.errors import SceneError
+    from forming_fenicsx.core.errors import SceneError
 
     def scene(rows, **material):
         path = tmp_path / "profile.csv"

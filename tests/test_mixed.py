@@ -2,8 +2,8 @@
 the penalty problem (Theorem 3.1) computed directly."""
 import pytest
 
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.app.run import solve_scene
 
 from conftest import make_scene
 

@@ -13,8 +13,8 @@ from test_run_outputs import DEMO
 CHILD = """
 import sys
 from mpi4py import MPI
-import forming_fenicsx.run as run
-from forming_fenicsx.cli import main
+import forming_fenicsx.app.run as run
+from forming_fenicsx.app.cli import main
 original = run.save_velocity
 def failing(path, u):
     if MPI.COMM_WORLD.rank == 1:

@@ -12,15 +12,16 @@ import dolfinx.fem.petsc
 import ufl
 from petsc4py import PETSc
 
-from forming_fenicsx import contact
-from forming_fenicsx.compat import function_space, petsc_vec, set_at_quadrature_points
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import BRACKET, NewtonSolver, next_trial, parabola_step, parabola_vertex
-from forming_fenicsx.run import run_scene, solve_scene
-from forming_fenicsx.scene import load_scene
-from forming_fenicsx.solvers import SecantSolver
+from forming_fenicsx.physics import contact
+from forming_fenicsx.core.compat import function_space, petsc_vec, set_at_quadrature_points
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import BRACKET, NewtonSolver, next_trial, parabola_step, parabola_vertex
+from forming_fenicsx.app.run import run_scene, solve_scene
+from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.solvers.solvers import SecantSolver
 
 from conftest import make_scene
 
@@ -37,7 +38,7 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
     a first-order remainder there)."""
     scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING,
                        solver={"method": "direct", "tolerance": 1e-2})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     SecantSolver(problem).solve()
     newton = NewtonSolver(problem)
     problem.freeze(problem.u)
@@ -67,7 +68,7 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
 
 def drawing_newton() -> tuple[FlowProblem, NewtonSolver]:
     scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING, solver={"method": "newton"})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     return problem, NewtonSolver(problem)
 
 

@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from forming_fenicsx.report import markdown_table, richardson
+from forming_fenicsx.core.report import markdown_table, richardson
 
 
 def test_richardson_recovers_a_known_limit():

@@ -14,8 +14,8 @@ from conftest import kept_figures
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.cli import main
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.app.cli import main
+from forming_fenicsx.app.run import solve_scene
 
 DEMO = str(Path(__file__).parents[1] / "demos" / "example1_extrusion.toml")
 COARSE = ["--set", "discretisation.mesh_size=1.0", "--quiet"]
@@ -170,7 +170,7 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
         env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
         env.update(XDG_CACHE_HOME=str(shared_tmp / "cold-cache"), OMPI_ALLOW_RUN_AS_ROOT="1",
                    OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.cli", "run", DEMO, "--out", str(out),
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "run", DEMO, "--out", str(out),
                                *COARSE, "--set", "output.fields=false", "--set", "output.figures=false"],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]

@@ -2,8 +2,8 @@
 check is silent below its thresholds, warns between them and fails above, naming cause and fix."""
 import pytest
 
-from forming_fenicsx.sanity import check_run
-from forming_fenicsx.scene import scene_from_dict
+from forming_fenicsx.post.sanity import check_run
+from forming_fenicsx.config.scene import scene_from_dict
 
 # measured on Example 2 (mu = 0.2, Q2 reduced, h = 0.05) with the default penalties
 NORMAL = {"die_penetration": 2e-5, "relative_divergence": 3e-3, "exit_zone_rate_ratio": 1.5e-5,
@@ -119,7 +119,7 @@ def test_heat_checks(changed, check, failure):
 
 
 def test_a_molten_workpiece_is_refused_before_any_work():
-    from forming_fenicsx.errors import SceneError
+    from forming_fenicsx.core.errors import SceneError
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "extrusion"}, "material": {"name": "AA6063",
                                                                       "temperature": 900.0},

@@ -10,11 +10,11 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import function_space
-from forming_fenicsx.projection import project_discontinuous
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import scene_from_dict
-from forming_fenicsx.sections import mean_axial_stress, values_at
+from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.fem.projection import project_discontinuous
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.post.sections import mean_axial_stress, values_at
 
 
 def test_discontinuous_projection_is_exact_on_its_space_and_skips_the_axis():

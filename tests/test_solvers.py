@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.cli import main
-from forming_fenicsx.compat import set_at_quadrature_points
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import NewtonSolver
-from forming_fenicsx.postprocess import scalars
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.solvers import LinearSolver, SecantSolver, diverging, stalled
+from forming_fenicsx.app.cli import main
+from forming_fenicsx.core.compat import set_at_quadrature_points
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.post.postprocess import scalars
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.solvers.solvers import LinearSolver, SecantSolver, diverging, stalled
 
 from conftest import make_scene
 
@@ -120,7 +120,7 @@ def test_penalty_secant_systems_are_symmetric_and_cholesky_gives_the_lu_answer(q
     for pc_type in ("cholesky", "lu"):
         scene = make_scene(**sections, solver={"method": "direct", "tolerance": 1e-6, "max_iterations": 1000,
                                                "petsc_options": {} if pc_type == "cholesky" else {"pc_type": "lu"}})
-        problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+        problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
         solver = SecantSolver(problem)
         assert solver.linear.ksp.getPC().getType() == pc_type
         assert solver.linear.positive_definite == (pc_type == "cholesky")
@@ -137,7 +137,7 @@ def test_mixed_secant_system_is_factorised_by_lu():
     """The mixed saddle point is symmetric but indefinite: LU by default (an L D L^T with pivoting
     failed on it in Example 2 with friction, needing ever more delayed pivots)."""
     scene = make_scene(discretisation={"mesh_size": 0.5, "formulation": "mixed"}, solver={"method": "direct"})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = SecantSolver(problem)
     assert solver.linear.ksp.getPC().getType() == "lu" and not solver.linear.positive_definite
     solver.destroy()
@@ -163,7 +163,7 @@ def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
                        discretisation={"mesh_size": 0.3, "element": "Q2", "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},
                        solver={"method": "newton", "max_iterations": 2})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = NewtonSolver(problem)
     solver.solve()
     assert solver.linear.ksp.getPC().getType() == "cholesky" and solver.newton.A is solver.linear.A
@@ -185,7 +185,7 @@ def test_mixed_newton_operator_is_factorised_by_lu():
     """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the secant's."""
     scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature", "formulation": "mixed"},
                        solver={"method": "newton", "max_iterations": 1})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = NewtonSolver(problem)
     solver.solve()
     assert solver.linear.ksp.getPC().getType() == "lu" and not solver.newton.positive_definite

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.app.run import solve_scene
 
 from conftest import make_scene, solved
 from test_drawing import drawing as example2  # solved once per session, shared with test_drawing

@@ -11,14 +11,14 @@ from mpi4py import MPI
 
 import dolfinx.fem.petsc
 
-from forming_fenicsx.compat import petsc_vec, set_at_quadrature_points
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import NewtonSolver
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import load_scene
-from forming_fenicsx.solvers import SecantSolver
-from forming_fenicsx.verification import radial_flow
+from forming_fenicsx.core.compat import petsc_vec, set_at_quadrature_points
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.verification.verification import radial_flow
 
 from conftest import make_scene
 
@@ -35,10 +35,10 @@ def test_reduced_jacobian_is_the_coupled_derivative():
     of A w here) is what the staggered step leaves out."""
     scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING, material=VOCE,
                        solver={"method": "direct", "tolerance": 1e-2})
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     SecantSolver(problem).solve()
     newton = NewtonSolver(problem)
-    problem.strain_field.in_tangent = True  # eps = eps(u) at every freeze
+    problem.field("strain").in_tangent = True  # eps = eps(u) at every freeze
     problem.freeze(problem.u)
     set_at_quadrature_points(newton.forms.dual, newton.forms.dual_reset)
     u = petsc_vec(problem.u)

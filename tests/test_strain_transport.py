@@ -29,10 +29,10 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.compat import GHOST_MODE, atan2, function_space
-from forming_fenicsx.coordinates import CoordinateSystem
-from forming_fenicsx.strain_transport import StrainField
-from forming_fenicsx.verification import RADIAL, radial_velocity, sector_mesh
+from forming_fenicsx.core.compat import GHOST_MODE, atan2, function_space
+from forming_fenicsx.physics.coordinates import CoordinateSystem
+from forming_fenicsx.coupled.strain_transport import StrainField
+from forming_fenicsx.verification.verification import RADIAL, radial_velocity, sector_mesh
 
 EPS0, JUMP = 0.2, 0.5
 SCHEMES, DEGREES, SYMMETRIES = ("supg", "upwind"), (1, 2), ("plane_strain", "axisymmetric")

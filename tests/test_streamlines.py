@@ -14,17 +14,17 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.compat import function_space
-from forming_fenicsx.forms import FlowProblem
-from forming_fenicsx.geometry import build_mesh
-from forming_fenicsx.newton import NewtonSolver
-from forming_fenicsx.output import write_exit_profile
-from forming_fenicsx.points import PointValues
-from forming_fenicsx.postprocess import exit_strain_profile
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import load_scene
-from forming_fenicsx.streamlines import streamline_strain
-from forming_fenicsx.verification import RADIAL, radial_problem
+from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.io.output import write_exit_profile
+from forming_fenicsx.mesh.points import PointValues
+from forming_fenicsx.post.postprocess import exit_strain_profile
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.post.streamlines import streamline_strain
+from forming_fenicsx.verification.verification import RADIAL, radial_problem
 
 STEEL = Path(__file__).resolve().parents[1] / "demos" / "steel_wire_pass.toml"
 
@@ -107,12 +107,12 @@ def test_exit_strain_profile_of_the_steel_wire(steel):
 def test_a_lost_streamline_takes_the_transported_strain(steel, monkeypatch, caplog):
     """A streamline that does not reach the entry (nan) is written as the transported strain,
     with a warning."""
-    import forming_fenicsx.streamlines as streamlines
+    import forming_fenicsx.post.streamlines as streamlines
 
     problem, _, _ = steel
     monkeypatch.setattr(streamlines, "streamline_strain",
                         lambda problem, points: np.full(len(points), np.nan))
-    with caplog.at_level(logging.WARNING, logger="forming_fenicsx.postprocess"):
+    with caplog.at_level(logging.WARNING, logger="forming_fenicsx.post.postprocess"):
         profile = exit_strain_profile(problem)
     if MPI.COMM_WORLD.rank == 0:
         assert np.array_equal(profile["streamlines"], profile["transported"])
@@ -121,10 +121,10 @@ def test_a_lost_streamline_takes_the_transported_strain(steel, monkeypatch, capl
 
 def test_the_next_pass_reads_the_written_profile(steel, shared_tmp):
     """exit_strain.csv as run.py writes it is the next pass's inflow: its strain at the entry
-    (problem.entry_strain, what the streamlines start from) and the transported strain's inflow
+    (the strain field's entry_strain, what the streamlines start from) and the transported strain's inflow
     are the written profile, the outermost element's mean at the surface; a point on the entry
     section keeps it (no strain gained)."""
-    from forming_fenicsx.units import Units
+    from forming_fenicsx.core.units import Units
 
     _, _, profile = steel
     path = shared_tmp / "exit_strain.csv"
@@ -135,9 +135,9 @@ def test_the_next_pass_reads_the_written_profile(steel, shared_tmp):
     scene = load_scene(STEEL, ["geometry.entry_diameter=1.8", "geometry.exit_diameter=1.62",
                                "discretisation.mesh_size=0.1", f"material.initial_strain_file="
                                f"\"{path}\""])
-    problem = FlowProblem(scene, build_mesh(scene, MPI.COMM_WORLD))
+    problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     entry = np.column_stack([np.zeros(len(written["y"])), written["y"]])
-    assert problem.entry_strain(entry) == pytest.approx(written["values"], rel=1e-7)
+    assert problem.field("strain").entry_strain(entry) == pytest.approx(written["values"], rel=1e-7)
     assert streamline_strain(problem, entry) == pytest.approx(written["values"], rel=1e-7)
     inflow = PointValues([problem.strain]).evaluate(entry[-1:])[0][0, 0]
     assert inflow == pytest.approx(written["surface_mean"], rel=1e-6)

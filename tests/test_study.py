@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-import forming_fenicsx.study as study
-from forming_fenicsx.cli import main
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.scene import read_scene_data
+import forming_fenicsx.app.study as study
+from forming_fenicsx.app.cli import main
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.config.scene import read_scene_data
 
 DEMOS = Path(__file__).parents[1] / "demos"
 DEMO = str(DEMOS / "example1_extrusion.toml")
@@ -40,7 +40,8 @@ def test_study_against_hill_and_resumption(shared_tmp, monkeypatch):
     assert "| error within | cheapest setting |" in (out / "study.md").read_text()
     # started again: every run is in study.json, nothing is solved
     calls = []
-    monkeypatch.setattr(study, "solve_scene", lambda *a, **k: calls.append(a) or pytest.fail("solved again"))
+    monkeypatch.setattr(study.grid, "solve_scene",
+                        lambda *a, **k: calls.append(a) or pytest.fail("solved again"))
     again = study.run_study(read_scene_data(DEMO, ["solver.tolerance=1e-3"]),
                             [SIZES, "solver.method=direct,modified"], out)
     assert not calls and len(again) == 6

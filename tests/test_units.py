@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.run import solve_scene
-from forming_fenicsx.scene import read_scene_data, scene_from_dict
-from forming_fenicsx.units import Units
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.app.run import solve_scene
+from forming_fenicsx.config.scene import read_scene_data, scene_from_dict
+from forming_fenicsx.core.units import Units
 
 DEMOS = Path(__file__).parents[1] / "demos"
 

@@ -4,9 +4,9 @@ import gmsh
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.errors import SceneError
-from forming_fenicsx.geometry import build_mesh, write_msh
-from forming_fenicsx.run import solve_scene
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.mesh.geometry import build_mesh, write_msh
+from forming_fenicsx.app.run import solve_scene
 
 from conftest import make_scene
 

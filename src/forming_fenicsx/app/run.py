@@ -1,0 +1,208 @@
+"""One run, in the order data flows: scene -> mesh -> forms -> solver -> results -> files."""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import dolfinx
+from mpi4py import MPI
+
+from forming_fenicsx.solvers.accuracy import solve_to_accuracy
+from forming_fenicsx.coupled.coupling import coupled_problem
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.mesh.geometry import build_mesh
+from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_profile, write_exit_profile, write_fields,
+                     write_history, write_summary)
+from forming_fenicsx.io.plotting import Heading, write_die_plot, write_exit_profile_plot, write_figures
+from forming_fenicsx.post.postprocess import (die_profile, exit_profile, exit_strain_profile, force_balance,
+                          output_fields, scalars)
+from forming_fenicsx.post.sanity import check_run
+from forming_fenicsx.core.units import DIMENSIONS
+from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.solvers.solvers import SecantSolver, SolveResult
+from forming_fenicsx.mesh.transfer import transfer
+
+log = logging.getLogger(__name__)
+
+
+def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
+                stop: Callable[[], str | None] | None = None,
+                restart: Path | None = None, previous: dolfinx.fem.Function | None = None
+                ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+    """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
+
+    ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
+    folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
+    mesh of the workpiece that starts it interpolated (transfer.py). Timed from when every rank has
+    entered (a rank still starting its interpreter is not the run's time)."""
+    comm.barrier()
+    start = time.perf_counter()
+    problem = coupled_problem(scene, build_mesh(scene, comm))
+    initial = None
+    if restart is not None:
+        initial = problem.u.copy()
+        load_velocity(Path(restart) / "velocity.npz", initial)
+    elif previous is not None:
+        initial = problem.u.copy()
+        transfer(previous, initial)
+    method = NewtonSolver if scene.solver.method == "newton" else SecantSolver
+    solver = method(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
+    setup = time.perf_counter() - start
+    result = solver.solve(initial)
+    solver.destroy()
+    post = time.perf_counter()
+    problem.update_state(problem.u, frozen_too=True)
+    numbers = scalars(problem)
+    post = time.perf_counter() - post
+    body = {
+        "scene": scene.to_dict(),
+        "scales": dataclasses.asdict(scene.scales),
+        "dolfinx_version": dolfinx.__version__,
+        "mpi_ranks": comm.size,
+        "dofs": problem.unknowns,
+        "linear_solves": result.linear_solves,
+        "outer_iterations": result.outer_iterations,
+        "solver_fallback": result.fallback,
+        "solve_error_estimate": result.solve_error,
+        "restarted_from": str(restart) if restart is not None else None,
+        **numbers,
+        "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
+        "time_split_s": time_split(comm, setup, result, post),
+    }
+    return problem, result, summarise(body, result, scene, comm)
+
+
+def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
+    """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
+    converged (a failed check means it did not, whatever the iteration did) and why, the units, then the
+    run's numbers. The reason leads with what the run measured: a failed check of a converged
+    iteration, or a cause (the law's rate window, drawability) found at the last iterate of one that
+    stopped, before the iteration's own reason. Warnings are logged on rank 0 (a failure is the
+    reason the command prints)."""
+    findings = check_run(body, scene, result.converged)
+    failures = [f.message for f in findings if f.failure]
+    converged = result.converged and not failures
+    cause = next((f.message for f in findings if f.cause), None)
+    if result.converged and failures:
+        reason = f"the iteration converged ({result.reason}), but the answer cannot be right: {failures[0]}"
+    elif not result.converged and cause is not None:
+        reason = f"{cause} (the iteration stopped: {result.reason})"
+    else:
+        reason = result.reason
+    summary = {"warnings": [f.message for f in findings if not f.failure], "failed_checks": failures,
+               "converged": converged, "reason": reason, "iteration_converged": result.converged,
+               "units": scene.units.summary(list(body), scene.geometry.whole_forces), **body}
+    if comm.rank == 0:
+        for text in summary["warnings"]:
+            log.warning("warning: %s", text)
+    return summary
+
+
+def time_split(comm: MPI.Comm, setup: float, result: SolveResult, post: float) -> dict[str, float]:
+    """Seconds (the slowest rank's) in setup (mesh, spaces, compiled forms), within the iteration in
+    assembly, factorisation, solves and the rest (state updates, projections, checks), and in the
+    post-processing of the summary's numbers."""
+    timings = result.timings
+    rest = result.iteration_time - timings.assembly - timings.factorisation - timings.solve
+    return {key: comm.allreduce(value, op=MPI.MAX) for key, value in
+            (("setup", setup), ("assembly", timings.assembly), ("factorisation", timings.factorisation),
+             ("solve", timings.solve), ("rest", rest), ("postprocess", post))}
+
+
+def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
+              comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False,
+              stop: Callable[[], str | None] | None = None, restart: Path | None = None) -> dict[str, Any]:
+    """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into ``out``.
+
+    The files are written into a hidden staging folder beside ``out`` and moved into place only when
+    all are complete, so ``out`` never holds a half-written run. An existing ``out`` is replaced only
+    with ``overwrite`` (FileExistsError otherwise, before any work).
+    """
+    out = Path(out)
+    exists = comm.bcast(out.exists() if comm.rank == 0 else None, root=0)
+    if exists and not overwrite:
+        raise FileExistsError(f"output folder {out} exists (use --force to replace it)")
+    staging = None
+    if comm.rank == 0:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+        umask = os.umask(0)
+        os.umask(umask)
+        staging.chmod(0o777 & ~umask)  # mkdtemp's 0700, made the user's normal permissions
+    staging = Path(comm.bcast(str(staging) if staging else None, root=0))
+    try:
+        summary = _solve_and_write(scene, staging, petsc_options, comm, title, stop, restart)
+    except BaseException:
+        if comm.rank == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+        raise
+    comm.barrier()
+    if comm.rank == 0:
+        if out.exists():
+            shutil.rmtree(out)
+        staging.rename(out)
+    comm.barrier()
+    return summary
+
+
+def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
+                     title: str, stop: Callable[[], str | None] | None, restart: Path | None) -> dict[str, Any]:
+    if scene.accuracy.target is None:
+        problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
+    else:
+        if restart is not None:
+            raise ValueError("--restart starts one run on the same mesh; accuracy.target runs a "
+                             "sequence of meshes, each started from the previous one: give one or "
+                             "the other")
+        problem, result, summary = solve_to_accuracy(
+            scene, lambda level, previous: solve_scene(level, petsc_options, comm, stop,
+                                                       previous=previous), comm)
+    save_velocity(out / "velocity.npz", problem.u)
+    if scene.output.fields:
+        write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
+    profile = die_profile(problem)
+    heading = Heading.of_run(title or scene.process.kind, scene, summary)
+    if scene.output.figures:
+        write_figures(problem, out, heading, profile)
+    profiles = []  # (file stem, summary/units key, profile, label, reference level)
+    if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
+        profiles.append(("exit_strain", "equivalent_strain",
+                         exit_strain_profile(problem),
+                         "equivalent strain", ("entry strain + ideal ln(A0/A1)",
+                                               summary["mean_entry_strain"] + summary["ideal_strain"])))
+    temperature = problem.field("temperature")
+    if temperature is not None:  # [thermal]: the product's temperature profile
+        profiles.append(("exit_temperature", "temperature",
+                         exit_profile(problem, temperature.T), "temperature",
+                         ("inflow temperature", scene.thermal.inflow_temperature)))
+    for stem, key, across, label, reference in profiles:
+        if comm.rank == 0:
+            write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
+            if scene.output.figures:
+                write_exit_profile_plot(across, out / f"{stem}.png", heading, label,
+                                        DIMENSIONS.get(key, ""), scene.units, reference)
+    if comm.rank == 0:
+        write_die_profile(out / "die.csv", profile, scene.units)
+        if scene.output.figures:
+            write_die_plot(profile, out / "die.png", heading, scene)
+        write_history(out / "history.csv", result.history)
+        write_summary(out / "summary.json", summary)
+        key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
+        unit = scene.units.label("stress")
+        log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
+                 summary[key], f" {unit}" if unit else "", summary["force_balance_residual"],
+                 summary["linear_solves"], summary["wall_time_s"])
+        if "accuracy" in summary:
+            accuracy = summary["accuracy"]
+            log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target "
+                     "%g %%) on %d meshes, %.1f s: %s", accuracy["quantity"], accuracy["value"],
+                     accuracy["extrapolated"], 100 * accuracy["estimate"], 100 * accuracy["target"],
+                     len(accuracy["meshes"]), accuracy["wall_time_s"], accuracy["reason"])
+    return summary

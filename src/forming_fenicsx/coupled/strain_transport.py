@@ -1,0 +1,234 @@
+"""The equivalent strain of steady flow: u . grad(eps) = rate in the workpiece, eps = eps_in where
+the material flows in (reference section 3).
+
+Pure advection: an unstabilised Galerkin scheme oscillates. Two stable schemes, W the measure
+weight (2 pi y when axisymmetric), (u.n)^- = max(-u.n, 0), degree p (the velocity's):
+- "supg": continuous Lagrange with streamline-upwind Petrov-Galerkin test functions,
+    int (u . grad eps - rate) (w + tau u . grad w) W dx + int (u.n)^- (eps - eps_in) w W ds = 0,
+  tau = h / (2 p |u|), h = sqrt|det J| of the cell map;
+- "upwind": discontinuous Lagrange with upwind fluxes: the same Galerkin term cell by cell plus,
+  on every interior facet, (u.n)^- [eps] w W from the side the flow leaves (the jump to the
+  upwind value is penalised where the flow enters a cell).
+Both impose the inflow condition weakly where the velocity enters (at more than 30 degrees to the
+boundary: not on die walls and free surfaces, which it follows), on any boundary shape, and
+are consistent (the exact eps satisfies them). A side the flow enters at less than 30 degrees gets
+no condition: there the error stalls (0.4 to 0.6 % on 32 cells at 20 degrees, orders below
+0.5, against p + 1 at 40 degrees).
+
+docs/strain_transport.md compares them on velocities with exact strain
+(tests/test_strain_transport.py). Both reach the order p + 1 when the strain rate is accurate (Q1:
+1.98 to 2.11, Q2: 2.90 to 3.20) and order 2 for Q1 and Q2 alike with the velocity in Q_p, as the
+flow gives it (its strain rate is O(h^p); the two schemes then agree within 5 %). At a step of the
+inflow strain the largest over- or undershoot is, of the jump, 11 to 22 % (Q1) and 15 to 19 % (Q2)
+for SUPG, 35 to 39 % (Q1) and 28 to 38 % (Q2) for upwind DG, which is exact only when the step lies
+on a mesh line and the flow along the mesh lines; the values do not fall with refinement (the step
+as the quadrature points of the inflow side see it, projected on the element). Upwind DG has 3.9
+(Q1) and 2.2 (Q2) times the unknowns and took 2.3 to 2.9 times as long (1 rank). Hence SUPG, the
+default. One linear solve (GMRES with ILU(1), SOLVER; option prefix ``strain_``) per velocity.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from forming_fenicsx.config.strain_profile import profile_values
+from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.physics.coordinates import CoordinateSystem
+from forming_fenicsx.fem.linear_system import LinearSystem, unchanged
+
+PREFIX = "strain"
+# GMRES with block-Jacobi ILU(1) in reverse Cuthill-McKee order (MUMPS LU should it fail): on the
+# copper wire's h 0.03 mm (47 000 unknowns) 5 iterations and 0.06 s against 0.16 s for MUMPS LU,
+# on 2 ranks 18 and 0.07 s against 0.17 s; ILU(0) did not converge (docs/hardening.md). SUPG only:
+# upwind DG's error stalled at 1e-6 on the Q2 wedge with it (MUMPS LU there)
+SOLVER = {"ksp_type": "gmres", "ksp_rtol": 1e-10, "ksp_max_it": 200, "pc_type": "bjacobi",
+          "sub_pc_type": "ilu", "sub_pc_factor_levels": 1, "sub_pc_factor_mat_ordering_type": "rcm"}
+# Newton's coupling switches from the relaxed step to the strain in the tangent once the strain
+# changes by less than TANGENT_FROM of its gain, or after TANGENT_AFTER relaxed freezes (docs/
+# hardening.md: 1e-2, 3e-2 and 1e-1 measured with the force balance that newton.py then requires,
+# 3e-2 the fastest on annealed copper; switching at once stopped 0.5 % off; the plane-strain
+# strip's relaxed step wandered for 200 steps)
+TANGENT_FROM = 3e-2
+TANGENT_AFTER = 12
+
+
+class StrainField:
+    """The transported equivalent strain ``eps`` (a Lagrange Function of the velocity's degree) of a
+    velocity field, and the frozen-coefficient protocol (frozen.py) that couples it to the flow:
+    ``freeze(u)`` solves the transport with u; ``change(u)`` is ||eps(u) - eps|| / ||eps|| in the
+    weighted L2 norm (one transport solve, kept for the next freeze at the same u)."""
+
+    name = "strain"
+    tangent = True  # Newton's step can carry its derivative (strain_tangent.py)
+
+    coupled = True  # a field of its own, unlike the friction bound (FlowProblem.coupled_settled)
+
+    def __init__(self, u: dolfinx.fem.Function, coordinates: CoordinateSystem, inflow_strain,
+                 degree: int, quadrature_degree: int, scheme: str = "supg",
+                 options: dict | None = None, relaxation: float = 0.5, tangent_from: float = 0.0,
+                 eps: dolfinx.fem.Function | None = None):
+        """``eps``: the Function to transport into (a flow law's strain coefficient), one of
+        ``degree`` and the scheme's family; a new one unless given."""
+        mesh = u.function_space.mesh
+        self.space = function_space(mesh, "P" if scheme == "supg" else "DP", degree) \
+            if eps is None else eps.function_space
+        self.eps = dolfinx.fem.Function(self.space, name="equivalent_strain") if eps is None else eps
+        # the strain flowing in at points (N, 2) of the entry (post.streamlines): the inflow
+        # strain when it is a number, else set by whoever knows the profile (coupled.coupling)
+        self.entry_strain: Callable[[np.ndarray], np.ndarray] | None = None
+        if isinstance(inflow_strain, (int, float)):
+            value = float(inflow_strain)
+            self.entry_strain = lambda points: np.full(len(points), value)
+        self._candidate = dolfinx.fem.Function(self.space)
+        self.velocity = dolfinx.fem.Function(u.function_space)  # the velocity eps belongs to
+        self._coordinates = coordinates
+        self.solves = 0
+        v = self.velocity
+        eps, w = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
+        metadata = {"quadrature_degree": quadrature_degree}
+        dx = coordinates.measure(ufl.dx(domain=mesh, metadata=metadata))
+        ds = coordinates.measure(ufl.ds(domain=mesh, metadata=metadata))
+        normal = ufl.FacetNormal(mesh)
+        # the inflow faces: where the velocity enters at more than 30 degrees to the boundary; a
+        # die wall or free surface, that the flow follows, has no condition (a characteristic
+        # boundary) even where the discrete u.n is slightly negative
+        entering = -ufl.dot(v, normal)
+        inflow = ufl.conditional(ufl.gt(entering, 0.5 * ufl.sqrt(ufl.dot(v, v))), entering, 0.0)
+        rate = coordinates.equivalent_strain_rate(v)
+        if scheme == "supg":
+            # the cell size (CellDiameter: Q1 only)
+            h = ufl.sqrt(abs(ufl.JacobianDeterminant(mesh)))
+            speed = ufl.sqrt(ufl.dot(v, v)) + 1e-300
+            test = w + h / (2 * degree * speed) * ufl.dot(v, ufl.grad(w))
+            jumps = 0
+        elif scheme == "upwind":
+            test = w
+            dS = coordinates.measure(ufl.dS(domain=mesh, metadata=metadata))
+            entering = {side: ufl.max_value(-ufl.dot(v(side), normal(side)), 0.0)
+                        for side in ("+", "-")}
+            jumps = (entering["+"] * (eps("+") - eps("-")) * w("+")
+                     + entering["-"] * (eps("-") - eps("+")) * w("-")) * dS
+        else:
+            raise ValueError(f"scheme must be supg or upwind; got {scheme!r}")
+        bilinear = ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps
+        linear = rate * test * dx + inflow * inflow_strain * w * ds
+        self._system = LinearSystem(dolfinx.fem.form(bilinear), dolfinx.fem.form(linear), mesh.comm,
+                                    PREFIX, options={**(SOLVER if scheme == "supg" else {}),
+                                                     **(options or {})})
+        # the transport residual R(eps(u), u) at the last solve, for its velocity derivative
+        self._residual = ufl.replace(bilinear, {eps: self._candidate}) - linear
+        self._dx = dx
+        self._norm = dolfinx.fem.form(self._candidate ** 2 * dx)
+        self._difference = dolfinx.fem.form((self._candidate - self.eps) ** 2 * dx)
+        # the strain the iteration starts from (the inflow strain everywhere, kept at the first
+        # freeze): the switch to the tangent measures the change against the strain gained
+        self._start: dolfinx.fem.Function | None = None
+        self._gained = None
+        self._solved_for: tuple[np.ndarray] | None = None
+        self._relaxation, self._tangent_from = relaxation, tangent_from
+        # eps = eps(u) at every freeze, and its derivative in Newton's step (strain_tangent.py)
+        self.in_tangent = False
+        self._relaxed_freezes = 0
+
+    def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
+        """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
+        everywhere (before the first solve) carries no strain: eps stays as it is. The solve for
+        the last velocity is kept: the same u (on every rank: the decision is collective, a
+        velocity changed on one rank only is solved on all) returns it without solving, even if
+        a Constant in the inflow strain has changed since."""
+        comm = self.space.mesh.comm
+        if unchanged(comm, self._solved_for, u.x.array):
+            return self._candidate
+        if comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
+            self._candidate.x.array[:] = self.eps.x.array
+            return self._candidate
+        self.velocity.x.array[:] = u.x.array
+        self.velocity.x.scatter_forward()
+        self._system.solve(self._candidate, "strain")
+        self.solves += 1
+        self._solved_for = (u.x.array.copy(),)
+        return self._candidate
+
+    def freeze(self, u: dolfinx.fem.Function) -> None:
+        """eps <- eps + relaxation (eps(u) - eps); with ``tangent_from`` > 0 (Newton), once the
+        change of the gain falls below it (or after TANGENT_AFTER freezes), eps <- eps(u) with
+        ``in_tangent`` set: Newton's step then carries the strain's derivative
+        (strain_tangent.py). Far from the answer the tangent's steps stopped short of it on
+        pre-strained stock; near it the relaxed step crawls along the slow mode of strain and
+        velocity following each other (docs/hardening.md: the couplings measured)."""
+        if not self.in_tangent and self._tangent_from > 0.0:
+            # the change only while the switch can still happen (it also solves for u)
+            self._relaxed_freezes += 1
+            self.in_tangent = (0.0 < self._change_of_gain(u) < self._tangent_from
+                               or self._relaxed_freezes > TANGENT_AFTER)
+        candidate = self.solve(u).x.array
+        relaxation = 1.0 if self.in_tangent else self._relaxation
+        self.eps.x.array[:] += relaxation * (candidate - self.eps.x.array)
+        self.eps.x.scatter_forward()
+
+    @property
+    def coefficient(self) -> dolfinx.fem.Function:
+        """The Function the flow law reads (strain_tangent.py differentiates the flow by it)."""
+        return self.eps
+
+    def settle(self, u: dolfinx.fem.Function) -> None:
+        """eps <- eps(u), the transport of u itself."""
+        self.eps.x.array[:] = self.solve(u).x.array
+        self.eps.x.scatter_forward()
+
+    def snapshot(self) -> object:
+        return self.eps.x.array.copy(), self.in_tangent, self._relaxed_freezes
+
+    def restore(self, saved: object) -> None:
+        self.eps.x.array[:], self.in_tangent, self._relaxed_freezes = saved
+        self._solved_for = None
+
+    def change(self, u: dolfinx.fem.Function) -> float:
+        """||eps(u) - eps|| / ||eps(u)|| in the weighted L2 norm (collective)."""
+        return self._relative(u, self._norm)
+
+    def _change_of_gain(self, u: dolfinx.fem.Function) -> float:
+        """||eps(u) - eps|| / ||eps(u) - eps_start||, eps_start the strain of the first freeze: on a
+        pre-strained stock ||eps(u)|| is mostly the inflow strain, and a change relative to it
+        switched to the tangent while Newton's steps were still 3 % of u (a third pass of
+        demos/copper_wire_schedule.py, which then stopped 12 % off the force balance)."""
+        if self._start is None:
+            self._start = self.eps.copy()
+            self._gained = dolfinx.fem.form((self._candidate - self._start) ** 2 * self._dx)
+        return self._relative(u, self._gained)
+
+    def _relative(self, u: dolfinx.fem.Function, reference: dolfinx.fem.Form) -> float:
+        """||eps(u) - eps|| over the square root of ``reference`` (collective; 0 when it is 0)."""
+        self.solve(u)
+        comm = self.space.mesh.comm
+        norm = comm.allreduce(dolfinx.fem.assemble_scalar(reference))
+        difference = comm.allreduce(dolfinx.fem.assemble_scalar(self._difference))
+        return float(np.sqrt(difference / norm)) if norm > 0 else 0.0
+
+    def velocity_derivative(self, direction) -> ufl.Form:
+        """dR/du [direction] of the transport residual R(eps, u) = a(u; eps, w) - L(u; w) at the last
+        solve (eps = eps(u)): the bilinear form C of the strain's sensitivity d eps = -D^-1 C du,
+        D the transport matrix."""
+        return ufl.derivative(self._residual, self.velocity, direction)
+
+    def transport_solve(self, b, x) -> None:
+        """x = D^-1 b with the transport matrix of the last solve."""
+        self._system.solve_vector(b, x, "strain")
+
+    def destroy(self) -> None:
+        self._system.destroy()
+
+
+def inflow_strain(mesh, degree: int, profile: np.ndarray, half_size: float):
+    """A strain profile across the entry (config.strain_profile) as a Lagrange Function of
+    ``degree`` on the mesh, a function of y alone: the inflow strain of the transport and its
+    first guess everywhere."""
+    target = dolfinx.fem.Function(function_space(mesh, "P", degree), name="inflow_strain")
+    y = target.function_space.tabulate_dof_coordinates()[:, 1]
+    target.x.array[:] = profile_values(profile, np.abs(y), half_size)
+    return target

@@ -1,0 +1,286 @@
+"""Gmsh scripts for the half models of Fig. 1, built from structured quadrilateral blocks (Fig. 2).
+
+Boundary roles are physical groups named as in section 2 (roles.py); a user's .msh file is checked by
+msh.py.
+"""
+from __future__ import annotations
+
+import math
+import os
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import gmsh
+import numpy as np
+from mpi4py import MPI
+
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.config.mesh_file import gmsh_session, open_msh
+from forming_fenicsx.core.roles import ROLES, WORKPIECE
+from forming_fenicsx.config.scene import Scene
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A prescribed velocity component on a boundary role: (2.5) on Gamma1, (2.8) on Gamma6."""
+
+    role: str
+    component: int
+    value: float
+
+
+@dataclass
+class FormingMesh:
+    """A dolfinx mesh with its facet tags (values from ROLES), the roles present and the constraints."""
+
+    mesh: object
+    facet_tags: object
+    roles: dict[str, int]
+    constraints: list[Constraint]
+
+
+def graded_edge(length: float, size: float, grading: float, toward_end: bool) -> tuple[int, float]:
+    """Number of elements and gmsh progression for an edge refined geometrically toward one end.
+
+    ``grading`` is the ratio of the largest to the smallest element on the edge (1 is uniform).
+    """
+    elements = max(1, math.ceil(length / size - 1e-9))
+    if elements == 1 or grading == 1.0:
+        return elements, 1.0
+    ratio = grading ** (1.0 / (elements - 1))
+    return elements, 1.0 / ratio if toward_end else ratio
+
+
+@dataclass
+class Edge:
+    start: str
+    end: str
+    elements: int
+    progression: float = 1.0
+
+
+def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
+                blocks: list[list[str]], groups: dict[str, list[str]],
+                arcs: dict[str, tuple[float, float]] | None = None) -> None:
+    """Add transfinite, recombined blocks to the current gmsh model.
+
+    A block is four edge names around it counter-clockwise; a leading '-' reverses an edge. An edge
+    named in ``arcs`` is the circular arc about the centre given there, else a line.
+    """
+    geo = gmsh.model.geo
+    point_tags = {name: geo.addPoint(x, y, 0.0) for name, (x, y) in points.items()}
+    edge_tags = {}
+    for name, edge in edges.items():
+        if arcs and name in arcs:
+            centre = geo.addPoint(*arcs[name], 0.0)
+            tag = geo.addCircleArc(point_tags[edge.start], centre, point_tags[edge.end])
+        else:
+            tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
+        geo.mesh.setTransfiniteCurve(tag, edge.elements + 1, "Progression", edge.progression)
+        edge_tags[name] = tag
+    surfaces = []
+    for loop in blocks:
+        signed = [-edge_tags[e[1:]] if e.startswith("-") else edge_tags[e] for e in loop]
+        surface = geo.addPlaneSurface([geo.addCurveLoop(signed)])
+        geo.mesh.setTransfiniteSurface(surface)
+        geo.mesh.setRecombine(2, surface)
+        surfaces.append(surface)
+    geo.synchronize()
+    gmsh.model.addPhysicalGroup(2, surfaces, WORKPIECE)
+    gmsh.model.setPhysicalName(2, WORKPIECE, "workpiece")
+    for role, names in groups.items():
+        gmsh.model.addPhysicalGroup(1, [edge_tags[n] for n in names], ROLES[role])
+        gmsh.model.setPhysicalName(1, ROLES[role], role)
+
+
+def _extrusion(scene: Scene) -> None:
+    """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at (xd, h1)."""
+    g, disc = scene.geometry, scene.discretisation
+    h0, h1, xd, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.die_position, g.length
+    size, grade = disc.mesh_size, disc.corner_grading
+    n_xc, r_xc = graded_edge(xd, size, grade, toward_end=True)
+    n_xe, r_xe = graded_edge(L - xd, size, grade, toward_end=False)
+    n_y1, r_y1 = graded_edge(h1, size, grade, toward_end=True)
+    n_y2, r_y2 = graded_edge(h0 - h1, size, grade, toward_end=False)
+    points = {"p1": (0, 0), "p2": (xd, 0), "p3": (L, 0), "p4": (L, h1),
+              "p5": (xd, h1), "p6": (xd, h0), "p7": (0, h0), "p8": (0, h1)}
+    edges = {
+        "bottom_container": Edge("p1", "p2", n_xc, r_xc), "bottom_exit": Edge("p2", "p3", n_xe, r_xe),
+        "exit_face": Edge("p3", "p4", n_y1, r_y1), "exit_surface": Edge("p5", "p4", n_xe, r_xe),
+        "inner_vertical": Edge("p2", "p5", n_y1, r_y1), "inner_horizontal": Edge("p8", "p5", n_xc, r_xc),
+        "die_face": Edge("p5", "p6", n_y2, r_y2), "container_wall": Edge("p7", "p6", n_xc, r_xc),
+        "ram_lower": Edge("p1", "p8", n_y1, r_y1), "ram_upper": Edge("p8", "p7", n_y2, r_y2),
+    }
+    blocks = [["bottom_container", "inner_vertical", "-inner_horizontal", "-ram_lower"],
+              ["inner_horizontal", "die_face", "-container_wall", "-ram_upper"],
+              ["bottom_exit", "exit_face", "-exit_surface", "-inner_vertical"]]
+    groups = _end_faces(scene, ["ram_lower", "ram_upper"], ["exit_face"])
+    groups.setdefault("gamma4_free", []).append("exit_surface")
+    groups["gamma3_contact"] = ["die_face", "container_wall"]
+    groups["gamma6_symmetry"] = ["bottom_container", "bottom_exit"]
+    _add_blocks(points, edges, blocks, groups)
+
+
+def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
+    """Gamma1 on the driven end face (entry for "push", exit for "pull"); the other end carries F_N
+    (Gamma5) when the scene gives one, else it is free (Gamma2 upstream, Gamma4 downstream)."""
+    driven, other, free = (entry, exit, "gamma4_free") if scene.process.drive == "push" else (exit, entry, "gamma2_free")
+    loaded = "gamma5_force" if scene.process.applied_force is not None else free
+    return {"gamma1_velocity": list(driven), loaded: list(other)}
+
+
+def _profiled(scene: Scene) -> None:
+    """A workpiece through a profiled die (Example 2's strip, a drawn bar, a conical extrusion).
+
+    Blocks along x: before the die [0, x0] (under a free surface for drawing, the container wall
+    for extrusion), one block under each segment of the die wall (lines, and arcs that Q2 follows),
+    then the product [x_n, L], with the same number of elements through the thickness; the ends of
+    the first and last blocks are graded toward the die entry and exit.
+    """
+    g, disc = scene.geometry, scene.discretisation
+    h0, h1, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.length
+    size, grade = disc.mesh_size, disc.corner_grading
+    segments = g.profile().segments
+    n_y = max(1, math.ceil(h0 / size - 1e-9))
+    tops = [(0.0, h0), *(seg.start for seg in segments), segments[-1].end, (L, h1)]
+    n_in, r_in = graded_edge(tops[1][0], size, grade, toward_end=True)
+    n_out, r_out = graded_edge(L - tops[-2][0], size, grade, toward_end=False)
+    counts = [(n_in, r_in)] + [_elements_along(seg, size) for seg in segments] + [(n_out, r_out)]
+    points = {f"b{i}": (x, 0.0) for i, (x, _) in enumerate(tops)}
+    points.update({f"t{i}": top for i, top in enumerate(tops)})
+    edges = {f"bottom{i}": Edge(f"b{i}", f"b{i + 1}", *counts[i]) for i in range(len(tops) - 1)}
+    edges.update({f"line{i}": Edge(f"b{i}", f"t{i}", n_y) for i in range(len(tops))})
+    edges.update({f"top{i}": Edge(f"t{i}", f"t{i + 1}", *counts[i]) for i in range(len(tops) - 1)})
+    arcs = {f"top{i + 1}": seg.centre for i, seg in enumerate(segments) if seg.centre is not None}
+    blocks = [[f"bottom{i}", f"line{i + 1}", f"-top{i}", f"-line{i}"] for i in range(len(tops) - 1)]
+    last = len(tops) - 1
+    groups = _end_faces(scene, ["line0"], [f"line{last}"])
+    wall = [f"top{i}" for i in range(1, last - 1)]
+    if scene.process.kind == "extrusion":
+        wall.insert(0, "top0")  # the container
+    else:
+        groups.setdefault("gamma2_free", []).append("top0")
+    groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
+    groups["gamma3_contact"] = wall
+    groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
+    _add_blocks(points, edges, blocks, groups, arcs)
+
+
+def _elements_along(segment, size: float) -> tuple[int, float]:
+    """Elements under a die segment: by its axial extent for a line (as Example 2's cone and land),
+    by its length for an arc; uniform."""
+    extent = segment.end[0] - segment.start[0] if segment.centre is None else segment.length
+    return graded_edge(extent, size, 1.0, toward_end=True)
+
+
+def _builder(scene: Scene):
+    """Example 1's square die, or a profiled die (drawing, conical extrusion)."""
+    return _extrusion if getattr(scene.geometry, "die", "") == "square" else _profiled
+
+
+def _generate(scene: Scene) -> None:
+    gmsh.model.add(scene.process.kind)
+    _builder(scene)(scene)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(scene.discretisation.degree)
+
+
+@contextmanager
+def _one_scotch_thread():
+    """SCOTCH, dolfinx's partitioner, on one thread per rank (Scotch 7 reads SCOTCH_PTHREAD_NUMBER at
+    each call): with its threads the partition changes from run to run, and with it the dof numbering
+    and MUMPS' ordering on several ranks. The variable is restored afterwards."""
+    previous = os.environ.get("SCOTCH_PTHREAD_NUMBER")
+    os.environ["SCOTCH_PTHREAD_NUMBER"] = "1"
+    try:
+        yield
+    finally:
+        if previous is None:
+            del os.environ["SCOTCH_PTHREAD_NUMBER"]
+        else:
+            os.environ["SCOTCH_PTHREAD_NUMBER"] = previous
+
+
+def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
+    """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
+    or read the scene's own .msh file (geometry.mesh_file, checked when the scene was read). The
+    partition repeats from run to run (_one_scotch_thread); its ghosts are compat.GHOST_MODE's."""
+    from dolfinx.mesh import meshtags
+
+    from forming_fenicsx.core.compat import mesh_from_gmsh
+
+    mesh_file = scene.geometry.mesh_file
+    with gmsh_session():
+        outcome: dict[int, int] | SceneError | None = None
+        if comm.rank == 0:
+            try:
+                outcome = open_msh(mesh_file) if mesh_file else None
+                if not mesh_file:
+                    _generate(scene)
+            except SceneError as error:
+                outcome = error
+        outcome = comm.bcast(outcome, root=0)
+        if isinstance(outcome, SceneError):
+            raise outcome
+        with _one_scotch_thread():
+            mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
+    if outcome is not None:  # the file's tags -> the roles' tags
+        values = np.array([outcome[int(v)] for v in facet_tags.values], dtype=np.int32)
+        facet_tags = meshtags(mesh, mesh.topology.dim - 1, facet_tags.indices, values)
+    present = set(int(v) for v in facet_tags.values)
+    present = set().union(*comm.allgather(present))
+    roles = {name: tag for name, tag in ROLES.items() if tag in present}
+    # Gamma1 and Gamma6 are normal to x and y in both processes: u_x = u_N^0 and u_y = 0.
+    constraints = [Constraint("gamma1_velocity", 0, scene.process.velocity), Constraint("gamma6_symmetry", 1, 0.0)]
+    return FormingMesh(mesh, facet_tags, roles, constraints)
+
+
+def write_msh(scene: Scene, path: str | Path) -> Path:
+    """Write the scene's mesh as a Gmsh .msh file (format 4.1) for use in other tools."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with gmsh_session():
+        _generate(scene)
+        gmsh.write(str(path))
+    return path
+
+
+def _chain_coordinate(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Arc length along a polyline of nodes, walked from the upstream end (smallest x, then largest y)
+    to the nearest node not yet visited."""
+    points = np.column_stack([x, y])
+    current = int(np.lexsort((-y, x))[0])
+    s = np.zeros(len(points))
+    visited = np.zeros(len(points), dtype=bool)
+    visited[current] = True
+    for _ in range(len(points) - 1):
+        distance = np.linalg.norm(points - points[current], axis=1)
+        distance[visited] = np.inf
+        following = int(distance.argmin())
+        s[following] = s[current] + distance[following]
+        visited[following] = True
+        current = following
+    return s
+
+
+def die_coordinate(scene: Scene, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Arc length along Gamma3 from where the workpiece meets the die, for points on Gamma3.
+
+    Square die: along the container wall (from the ram), then down the die face. A profiled die:
+    along its wall (DieProfile.coordinate), after the container's length for an extrusion. A user's
+    mesh: along the chain of its Gamma3 nodes.
+    """
+    g = scene.geometry
+    if g.mesh_file:
+        return _chain_coordinate(x, y)
+    if g.die == "square":
+        h0 = 0.5 * g.entry_thickness
+        on_face = np.isclose(x, g.die_position) & (y < h0 - 1e-12 * h0)
+        return np.where(on_face, g.die_position + (h0 - y), x)
+    profile = g.profile()
+    along = profile.coordinate(x, y)
+    if scene.process.kind == "drawing":
+        return along
+    return np.where(x < profile.start[0], x, profile.start[0] + along)

@@ -1,0 +1,281 @@
+"""Physical sanity of a run, checked after every run: what a converged iteration can still get wrong.
+
+Each check reads the run's summary and gives a :class:`Finding`: a warning (the answer may be off; the
+run still counts as converged) or a failure (the answer cannot be right: the run counts as not
+converged and the command exits with 3). Every message names what was measured, the likely cause and
+the fix that fits the scene's settings; a ``cause`` (the law's rate window, drawability) is checked
+before the symptoms it explains. Thresholds (docs/sanity.md gives the values measured on correct and
+broken runs):
+
+| check | warning above | failure above |
+|---|---|---|
+| plastic work at rates above rate2 of (4.5) | 10 % | |
+| plastic work in a law's linear branch (below rate1 of (4.5), below a rate_floor) | 50 % | |
+| die_penetration (inflow into the die / throughput) | 1 % | 5 % |
+| relative_divergence, penalty formulation | 0.1 | 0.5 |
+| drawing stress / yield stress of the drawn product | 0.9 | 0.99 |
+| exit_zone_rate_ratio (product deforming after the die) | | 0.1 |
+| free_surface_crossing | 5 % | 20 % |
+| die_contact_fraction | | 0 (no contact at all) |
+| estimated linear-solve error / solver.tolerance | 1 % | |
+| force_balance_residual (x forces of the driving face, the die and Gamma5) | 1 % | 5 % |
+| [thermal] highest temperature / solidus (kelvin) | 0.95 | 1 |
+| [thermal] lowest temperature below the coldest inflow, tool or air (K) | 1 | 10 |
+| [thermal] energy-balance residuals (heat, global) | 1 % | 5 % |
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from forming_fenicsx.config.scene import D_N_RELATIVE, D_RELATIVE, Scene
+from forming_fenicsx.solvers.solvers import ILL_CONDITIONED
+
+PENETRATION = (0.01, 0.05)
+COMPRESSIBLE = (0.1, 0.5)
+DRAWING_LIMIT = (0.9, 0.99)
+EXIT_ZONE_RIGID = 0.1
+FREE_SURFACE = (0.05, 0.2)
+ABOVE_RATE2 = 0.1
+BELOW_FLOOR = 0.5
+FORCE_BALANCE = (0.01, 0.05)
+SOLIDUS = (0.95, 1.0)        # highest temperature over the solidus, both in kelvin
+UNDERCOOLED = (1.0, 10.0)    # K below the coldest temperature entering or around the workpiece
+ENERGY_BALANCE = (0.01, 0.05)
+KELVIN = 273.15
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One check's verdict: ``failure`` when the answer cannot be right; ``cause`` when it names
+    why a run went wrong (the headline of a run that also failed to converge)."""
+
+    check: str
+    message: str
+    failure: bool = False
+    cause: bool = False
+
+
+def _graded(check: str, value: float, levels: tuple[float, float], message: str) -> Finding | None:
+    if not value > levels[0]:
+        return None
+    return Finding(check, message, failure=value > levels[1])
+
+
+def product_name(scene: Scene) -> str:
+    """What the process makes, named for its symmetry: a drawn wire or strip, an extruded rod or
+    strip."""
+    shape = "wire" if scene.geometry.axisymmetric else "strip"
+    if scene.process.kind == "extrusion":
+        shape = "rod" if scene.geometry.axisymmetric else "strip"
+    return f"{'drawn' if scene.process.kind == 'drawing' else 'extruded'} {shape}"
+
+
+def die_penetration(summary: dict[str, Any], scene: Scene, converged: bool) -> Finding | None:
+    """Inflow into the die: the advice follows the scene's contact settings."""
+    penalty = scene.penalty
+    if not penalty.augmented:
+        fix = (f"Use penalty.augmented = true (a multiplier carries the pressure and the workpiece "
+               f"does not enter the die), or a smaller penalty.d_N_relative (now "
+               f"{penalty.d_N_relative:.3g})")
+    elif not converged:
+        fix = ("The contact is augmented, so a converged run does not let the workpiece through: "
+               "its multiplier had not settled when the iteration stopped (the reason says why)")
+    else:
+        fix = ("The augmented contact's multiplier stops updating when it changes by less than "
+               "100 solver.tolerance: use a smaller solver.tolerance")
+    return _graded("die_penetration", summary["die_penetration"], PENETRATION,
+                   f"{100 * summary['die_penetration']:.3g} % of the throughput flows into the die "
+                   f"(u_N > 0 on Gamma3; contact penalty d_N = {penalty.d_N:.3g}, "
+                   f"{penalty.d_N_relative:.3g} times U/sigma0): the workpiece passes through the die "
+                   f"instead of being formed by it. {fix}")
+
+
+def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> Finding | None:
+    if scene.discretisation.formulation != "penalty":
+        return None
+    value, penalty = summary["relative_divergence"], scene.penalty
+    causes = []
+    if any(f.check == "die_penetration" for f in found):
+        causes.append("the die lets the workpiece through (above), so it is squeezed instead of formed")
+    if penalty.d_relative > 0.01:
+        causes.append(f"penalty.d = {penalty.d:.3g} is {penalty.d_relative:.3g} times rate0/sigma0, a soft "
+                      f"volumetric penalty: use a smaller penalty.d_relative or leave penalty.d out (default "
+                      f"{D_RELATIVE:g}; Theorem 3.1: the error falls like O(d))")
+    if scene.discretisation.element == "Q1" and scene.discretisation.volumetric_integration == "complete":
+        causes.append("Q1 with complete integration of the penalty locks: use reduced integration or Q2")
+    if not causes:
+        causes.append(f"penalty.d_relative = {penalty.d_relative:.3g}: use a smaller one")
+    return _graded("compressibility", value, COMPRESSIBLE,
+                   f"the material compresses: ||div u||/||e(u)|| = {value:.2g}; the results are those of a "
+                   f"compressible material. Cause: {'; '.join(causes)}")
+
+
+def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
+    """The product must leave the die rigid. A drawn product's stress must stay below its yield
+    stress in tension (2k = 2 sigma0/sqrt3 in plane strain, sigma0 for a round bar): when it
+    reaches it the product yields after the die and the pass cannot be drawn (the ideal work
+    reaches it at a reduction of 1 - 1/e = 63 %). A law in its linear (viscous) branch stretches
+    the product under any load: then the cause is the rate window (``found``)."""
+    product, drawing = product_name(scene), scene.process.kind == "drawing"
+    ratio = summary["exit_zone_rate_ratio"]
+    yields = math.isfinite(ratio) and ratio > EXIT_ZONE_RIGID
+    window = next((f for f in found if f.check == "rate_window"), None)
+    stress_ratio = summary.get("product_yield_ratio", math.nan) if drawing else math.nan
+    limit = "sigma0, a round bar" if scene.geometry.axisymmetric else "2k, a plane-strain strip"
+    stress = (f"the drawing stress {summary['drawing_stress']:.4g} is {stress_ratio:.3f} times the "
+              f"yield stress in tension of the {product} ({limit})") if drawing else ""
+    rigid = (f"its mean strain rate over the last exit thickness is {ratio:.3g} times the "
+             f"workpiece's mean, where a rigid product has below {EXIT_ZONE_RIGID:g}")
+    if yields and window is not None:
+        return [Finding("exit_zone", f"the {product} deforms after the die ({rigid}) because "
+                        "the flow law is viscous at this velocity: " + window.message, failure=True,
+                        cause=True)]
+    if yields and drawing and stress_ratio > DRAWING_LIMIT[0]:
+        return [Finding("drawability", f"not drawable: {stress}, and the {product} yields after the "
+                        f"die ({rigid}). No steady drawing exists at this reduction "
+                        f"({100 * summary.get('reduction', math.nan):.3g} %) and friction: reduce "
+                        "the reduction per pass (the ideal limit is 63 %; real passes stay below "
+                        "about 35 %) or the friction", failure=True, cause=True)]
+    if yields:
+        load = "the drawing force" if drawing else "the back force on the product (Gamma5)" \
+            if scene.process.applied_force else "the flow"
+        return [Finding("exit_zone", f"the {product} deforms after the die: {rigid}. It yields "
+                        f"under {load}: not a steady process. Check process.applied_force and the "
+                        "die (a product that leaves the land still converging), or refine the mesh "
+                        "at the die exit", failure=True)]
+    if not drawing:
+        return []
+    finding = _graded("drawability", stress_ratio, DRAWING_LIMIT, f"{stress}: ")
+    if finding is None:
+        return []
+    tail = ("it yields after the die, so no steady drawing exists at this reduction and friction "
+            "(not drawable): reduce the reduction or the friction" if finding.failure else
+            "close to the drawing limit, where the product may neck; industrial passes stay below "
+            "about 0.6 to 0.8")
+    return [Finding(finding.check, finding.message + tail, finding.failure, finding.failure)]
+
+
+def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    value = summary["free_surface_crossing"]
+    return _graded("free_surface_crossing", value, FREE_SURFACE,
+                   f"{100 * value:.3g} % of the throughput crosses the free surfaces of the fixed domain (2.6): "
+                   "the real free surface lies elsewhere and the forces are those of another shape. Usual "
+                   "causes: the product yields after the die, the die leaves a gap the fixed domain ignores, "
+                   "or a coarse mesh (the crossing falls like the mesh size: refine discretisation.mesh_size)")
+
+
+def die_contact(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    fraction = summary["die_contact_fraction"]
+    if not (math.isfinite(fraction) and fraction <= 0):
+        return None
+    return Finding("die_contact", "the workpiece does not touch the die anywhere (no point of Gamma3 with "
+                   "u_N > 0): the die carries no load and the process force is not that of forming. Check "
+                   "process.velocity (its sign and where process.drive applies it) and the die geometry",
+                   failure=True)
+
+
+def rate_window(summary: dict[str, Any], scene: Scene) -> list[Finding]:
+    """Every law is linear (viscous) below its rate floor (rate1 of (4.5)), and (4.5) also above
+    rate2: the plastic work done there is that of a fluid, not of the nearly rate-independent
+    metal the law describes."""
+    law, found = scene.material, []
+    above = summary.get("dissipation_above_rate2", 0.0)
+    below = summary.get("dissipation_below_rate1", summary.get("dissipation_below_rate_floor", 0.0))
+    velocity = f"process.velocity = {scene.process.velocity:g}"
+    if above > ABOVE_RATE2:
+        found.append(Finding("rate_window", f"{100 * above:.3g} % of the plastic work is done at "
+                             f"strain rates above material.rate2 = {law.rate2:g}, where the law (4.5) "
+                             "turns linear and the flow stress grows in proportion to the rate: at "
+                             f"{velocity} the process runs in the law's viscous branch. Raise "
+                             "material.rate2 (it is in the scene's time unit) unless the material is "
+                             "that rate sensitive, or check process.velocity", cause=True))
+    if below > BELOW_FLOOR:
+        key = "material.rate1" if hasattr(law, "rate1") else "material.rate_floor"
+        found.append(Finding("rate_window", f"{100 * below:.3g} % of the plastic work is done at "
+                             f"strain rates below {key} = {law.rate_floor:g}, where the law is linear "
+                             f"(a viscous fluid, not a plastic metal): at {velocity} the process runs "
+                             f"in the wrong branch of the law. Lower {key} (it is in the scene's time "
+                             "unit) or check process.velocity", cause=True))
+    return found
+
+
+def solve_accuracy(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    error = summary["solve_error_estimate"]
+    if not error > ILL_CONDITIONED * scene.solver.tolerance:
+        return None
+    return Finding("solve_accuracy", f"ill-conditioned linear systems: estimated relative error of a solve "
+                   f"{error:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; use larger penalty parameters "
+                   "(penalty.d_relative, penalty.d_N_relative, friction.d_T_relative)")
+
+
+def force_balance(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """The x forces on the workpiece must balance (verification.md): a driving force that differs
+    from the die's by percents is not the force of this flow, whatever the increment says."""
+    value = summary["force_balance_residual"]
+    fix = ("Set solver.force_tolerance (e.g. 1e-3) so the iteration goes on until they balance"
+           if scene.solver.force_tolerance == 0 else "Lower solver.force_tolerance")
+    return _graded("force_balance", value, FORCE_BALANCE,
+                   f"the x forces do not balance: |driving + applied - die| is {100 * value:.3g} % of "
+                   "the driving force, so the reported forces and stresses are not those of one flow. "
+                   f"{fix}, or try solver.method = \"direct\"")
+
+
+def _temperature(kelvin: float) -> str:
+    return f"{kelvin:.1f} K ({kelvin - KELVIN:.1f} C)"
+
+
+def heat(summary: dict[str, Any], scene: Scene) -> list[Finding]:
+    """[thermal]: a solid workpiece stays below its solidus, no colder than what enters or surrounds
+    it (no heat sink inside), and its energy balances close."""
+    thermal = scene.thermal
+    if thermal is None or "max_temperature" not in summary:
+        return []
+    found = []
+    hottest, coldest = summary["max_temperature"], summary["min_temperature"]
+    if thermal.solidus is not None:
+        finding = _graded("melting", hottest / thermal.solidus, SOLIDUS,
+                          f"the workpiece reaches {_temperature(hottest)}, "
+                          f"{hottest / thermal.solidus:.3f} of its solidus "
+                          f"{_temperature(thermal.solidus)} in kelvin: ")
+        if finding is not None:
+            tail = ("it melts, and a rigid-plastic solid is not a model of it. The plastic and "
+                    "friction heat grow with the velocity (here process.velocity = "
+                    f"{scene.process.velocity:g}): lower it, or the inflow temperature"
+                    if finding.failure else "close to melting (incipient melting, hot shortness, "
+                    "speed cracking): lower process.velocity or the inflow temperature")
+            found.append(Finding("melting", finding.message + tail, finding.failure))
+    below = thermal.coldest - coldest
+    finding = _graded("temperature_undershoot", below, UNDERCOOLED,
+                      f"the workpiece's lowest temperature {_temperature(coldest)} lies {below:.3g} K "
+                      f"below the coldest temperature entering or around it "
+                      f"({_temperature(thermal.coldest)}), which no steady heat flow can give: the "
+                      "discrete temperature oscillates (a boundary layer thinner than the mesh); "
+                      "refine discretisation.mesh_size")
+    found += [finding] if finding is not None else []
+    balance = summary.get("energy_balance", {})
+    for key, name in (("residual", "heat balance (heat out against heat generated)"),
+                      ("global_residual", "energy balance (driving power against heat out and "
+                                          "work stored)")):
+        value = balance.get(key, math.nan)
+        finding = _graded("energy_balance", abs(value), ENERGY_BALANCE,
+                          f"the {name} is off by {100 * value:.3g} %: the temperature is not that "
+                          "of this flow's heat; refine discretisation.mesh_size (steep thermal "
+                          "boundary layers at high Peclet numbers) or lower solver.tolerance")
+        found += [finding] if finding is not None else []
+    return found
+
+
+def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> list[Finding]:
+    """Every check, a cause before its symptoms; ``converged``: whether the iteration converged
+    (the advice differs)."""
+    found = rate_window(summary, scene)
+    found += [f for f in (die_penetration(summary, scene, converged), die_contact(summary, scene))
+              if f is not None]
+    found += [f for f in (compressibility(summary, scene, found),) if f is not None]
+    found += drawability(summary, scene, found)
+    found += heat(summary, scene)
+    found += [f for f in (free_surfaces(summary, scene), solve_accuracy(summary, scene),
+                          force_balance(summary, scene)) if f is not None]
+    return found
