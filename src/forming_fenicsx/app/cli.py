@@ -112,18 +112,32 @@ def configure_logging(quiet: bool, rank: int) -> None:
         if _not_a_compiler_line not in handler.filters:
             handler.addFilter(_not_a_compiler_line)
     log.propagate = False
-    for handler in [h for h in log.handlers if getattr(h, "forming_cli", False)]:
-        log.removeHandler(handler)  # a previous main() in this process (its stdout may be gone)
     handler = logging.StreamHandler(sys.stdout) if rank == 0 else logging.NullHandler()
     handler.setFormatter(logging.Formatter("%(message)s"))
-    handler.forming_cli = True
     log.addHandler(handler)
     log.setLevel(logging.WARNING if quiet else logging.INFO)
     # every iterate's line, unless the command quiets them again (a study: one line per run)
     logging.getLogger("forming_fenicsx.solvers.solvers").setLevel(logging.NOTSET)
 
 
+LOGGERS = ("forming_fenicsx", "forming_fenicsx.solvers")  # the ones configure_logging sets
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The `forming` command; the loggers it configures are as before when it returns (a command
+    run within a process, as the tests do, leaves no logging state behind)."""
+    loggers = [logging.getLogger(name) for name in LOGGERS]
+    saved = [(logger.level, logger.propagate, list(logger.handlers)) for logger in loggers]
+    try:
+        return _main(argv)
+    finally:
+        for logger, (level, propagate, handlers) in zip(loggers, saved, strict=True):
+            logger.setLevel(level)
+            logger.propagate = propagate
+            logger.handlers[:] = handlers
+
+
+def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["bench"]:  # its own parser: every case runs in a child process
         from forming_fenicsx.app.bench import main as bench
