@@ -7,6 +7,7 @@ import ufl
 from petsc4py import PETSc
 
 from forming_fenicsx.core.compat import petsc_vec
+from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem, SplitForm
 from forming_fenicsx.fem.measures import quadrature_degree
 from forming_fenicsx.fem.newton_forms import newton_forms

@@ -48,7 +48,7 @@ def test_reduced_jacobian_is_the_coupled_derivative():
     direction = u.duplicate()
     newton.newton.solve_system(direction)
     dolfinx.fem.petsc.set_bc(direction, problem.bcs, None, 0.0)
-    tangent = newton.strain_tangent
+    tangent = newton.coupled_tangent
     tangent.assemble()
     coupled, plain = direction.duplicate(), direction.duplicate()
     tangent.mult(direction, coupled)

@@ -20,7 +20,7 @@ from typing import Any
 
 from forming_fenicsx.core.report import markdown_table
 
-DEMOS = Path(__file__).resolve().parents[2] / "demos"
+DEMOS = Path(__file__).resolve().parents[3] / "demos"
 EXAMPLES = {
     1: ("example1_extrusion.toml", "ram_pressure", []),
     2: ("example2_drawing_mu02.toml", "mean_die_pressure",

@@ -120,7 +120,7 @@ def configure_logging(quiet: bool, rank: int) -> None:
     logging.getLogger("forming_fenicsx.solvers.solvers").setLevel(logging.NOTSET)
 
 
-LOGGERS = ("forming_fenicsx", "forming_fenicsx.solvers")  # the ones configure_logging sets
+LOGGERS = ("forming_fenicsx", "forming_fenicsx.solvers.solvers")  # the ones configure_logging sets
 
 
 def main(argv: list[str] | None = None) -> int:
