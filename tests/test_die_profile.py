@@ -201,7 +201,7 @@ def cosine_die(path, segments: int) -> None:
     x = np.append(3.0 + 1.17 * t, 4.57)
     y = np.append(0.8 + 0.1 * (1 + np.cos(np.pi * t)), 0.8)
     if MPI.COMM_WORLD.rank == 0:
-        path.write_text("x,y\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(x, y, strict=True)))
+        path.write_text("x,y\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(x, y, strict=True)))
     MPI.COMM_WORLD.barrier()
 
 

@@ -1,6 +1,7 @@
-"""Every difference between the supported dolfinx releases (0.5 on Debian 12, 0.9 on Debian 13).
+"""Every difference between the supported dolfinx releases (0.5 on Debian 12, 0.9 on Debian 13),
+and between the NumPy they come with (1.24 and 2.2).
 
-Nothing outside this module looks at ``dolfinx.__version__``.
+Nothing outside this module looks at ``dolfinx.__version__`` or NumPy's.
 """
 from __future__ import annotations
 
@@ -19,6 +20,10 @@ if TYPE_CHECKING:
 
 DOLFINX_VERSION = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
 LEGACY = DOLFINX_VERSION < (0, 7)
+
+# the trapezoidal rule: np.trapz in NumPy 1 (Debian 12), np.trapezoid from NumPy 2 (Debian 13,
+# which deprecates trapz)
+trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 GHOST_MODE = dolfinx.mesh.GhostMode.shared_facet
 """Every mesh's ghosts on several ranks: the cells across the facets a rank shares, without which
