@@ -7,12 +7,8 @@ import math
 import numpy as np
 import pytest
 
-<<<<<<< HEAD
-from forming_fenicsx.physics.closed_forms import (
-=======
 from forming_fenicsx.core.compat import trapezoid
-from forming_fenicsx.closed_forms import (
->>>>>>> main
+from forming_fenicsx.physics.closed_forms import (
     avitzur_cone_factor, avitzur_drawing_stress, avitzur_optimum_angle,
     avitzur_optimum_angle_approx, central_burst_indicator, nadai_wedge_factor, radial_flow,
     radial_flow_strain, radial_flow_stress_rise, sachs_drawing_stress, shield_cone_factor,
