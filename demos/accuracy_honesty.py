@@ -22,7 +22,7 @@ from mpi4py import MPI
 from forming_fenicsx.solvers.accuracy import estimate, relative, solve_to_accuracy
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.app.study import exact_value
 from forming_fenicsx.verification.verification import radial_flow
 

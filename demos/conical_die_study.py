@@ -18,7 +18,7 @@ from forming_fenicsx.physics.closed_forms import (avitzur_drawing_stress, avitzu
                                           avitzur_optimum_angle_approx, sachs_drawing_stress)
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 ANGLES = (4.0, 6.0, 8.0, 10.0, 15.0, 20.0, 30.0)

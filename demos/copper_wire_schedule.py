@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import run_scene
-from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.config.loader import load_scene
 
 SCENE = Path(__file__).with_name("copper_wire_pass.toml")
 DIAMETERS = (2.0, 1.8, 1.62, 1.46)

@@ -18,7 +18,7 @@ from mpi4py import MPI
 from forming_fenicsx.app.cli import configure_logging
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import apply_overrides, read_scene_data, scene_from_dict
+from forming_fenicsx.config.loader import apply_overrides, read_scene_data, scene_from_dict
 
 DEMOS = Path(__file__).parent
 COMMON = ["discretisation.element=Q2", "discretisation.volumetric_integration=reduced",

@@ -21,7 +21,7 @@ import numpy as np
 from forming_fenicsx.physics.closed_forms import avitzur_cone_factor, shield_cone_factor
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.post.sections import mean_axial_stress
 
 ROOT = Path(__file__).resolve().parents[1]

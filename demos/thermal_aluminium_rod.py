@@ -22,7 +22,7 @@ from mpi4py import MPI
 
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import read_scene_data, scene_from_dict
+from forming_fenicsx.config.loader import read_scene_data, scene_from_dict
 from forming_fenicsx.coupled.thermal import ThermalMaterial, effusivity_share
 
 KELVIN = 273.15

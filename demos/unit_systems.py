@@ -11,7 +11,8 @@
 
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import Scene, scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
+from forming_fenicsx.config.scene import Scene
 
 PSI = 6894.757293168361  # Pa
 # the unit system: (its length unit in mm, its stress unit in MPa, labels)

@@ -10,7 +10,8 @@ from types import ModuleType
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.config.scene import Scene, scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
+from forming_fenicsx.config.scene import Scene
 
 
 # The mark `no_parallel_content`: a test whose work does not depend on the number of ranks of the

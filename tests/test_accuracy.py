@@ -14,7 +14,7 @@ from forming_fenicsx.app.cli import accuracy_override, main
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import build_mesh
-from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.mesh.transfer import transfer
 
 from conftest import make_scene

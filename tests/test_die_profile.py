@@ -15,7 +15,7 @@ from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 
 
 def test_entry_radius_is_tangent_to_the_surface_and_the_cone():
@@ -183,7 +183,7 @@ def test_conical_extrusion_ram_pressure(symmetry, tmp_path):
 def test_a_relative_profile_file_is_read_beside_the_scene(tmp_path):
     """A scene file naming die_profile_file = "die.csv" reads the CSV beside it, from any working
     directory."""
-    from forming_fenicsx.config.scene import load_scene
+    from forming_fenicsx.config.loader import load_scene
 
     (tmp_path / "die.csv").write_text("x,y\n4.0,1.5\n4.5,1.3937\n6.1,1.25\n7.1,1.25\n")
     (tmp_path / "strip.toml").write_text(

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.verification.verification import radial_flow, radial_hardening_stress_rise
 
 LAWS = {"hollomon": {"law": "hollomon", "K": 1.0, "n": 0.3},

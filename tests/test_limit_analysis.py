@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from forming_fenicsx.verification.limit_analysis import lower_bound, strip_triangulation, upper_bound
-from forming_fenicsx.config.scene import DrawingGeometry
+from forming_fenicsx.config.geometry import DrawingGeometry
 
 pytestmark = pytest.mark.no_parallel_content  # numpy and scipy's linprog (tests/conftest.py)
 

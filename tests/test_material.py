@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.physics.material import PiecewisePowerLaw, PowerLaw
+from forming_fenicsx.physics.flow_laws import PiecewisePowerLaw, PowerLaw
 
 
 def test_piecewise_power_law_branches():
@@ -57,7 +57,7 @@ def test_laws_breaking_2_10_are_rejected(law, key):
 
 def hardening_laws():
     """One law of each hardening curve and rate factor."""
-    from forming_fenicsx.physics.material import HollomonLaw, SwiftLaw, VoceLaw
+    from forming_fenicsx.physics.flow_laws import HollomonLaw, SwiftLaw, VoceLaw
 
     return [HollomonLaw(K=315.0, n=0.54).resolve(1.0),
             SwiftLaw(K=500.0, n=0.2, prestrain=0.02, rate_factor="power", m=0.05).resolve(1.0),
@@ -114,7 +114,7 @@ def test_potential_derivative_is_the_flow_stress(index):
 def test_named_material_cited_and_overridden():
     """material.name = "copper_annealed" is Hollomon K = 315 MPa, n = 0.54 (Kalpakjian & Schmid);
     a key given beside it overrides the table's."""
-    from forming_fenicsx.config.scene import scene_from_dict
+    from forming_fenicsx.config.loader import scene_from_dict
 
     data = {"process": {"kind": "drawing"}, "units": {"stress": "MPa", "length": "mm"},
             "material": {"name": "copper_annealed"}, "discretisation": {"averaging": "quadrature"}}
@@ -136,7 +136,7 @@ def test_sellars_tegart_law():
     from mpi4py import MPI
     from scipy.integrate import quad
 
-    from forming_fenicsx.config.scene import scene_from_dict
+    from forming_fenicsx.config.loader import scene_from_dict
 
     def scene(material, **more):
         return scene_from_dict({"process": {"kind": "extrusion"}, "units": {

@@ -10,7 +10,7 @@ import pytest
 
 from forming_fenicsx.physics.closed_forms import avitzur_drawing_stress, sachs_drawing_stress
 from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.config.scene import load_scene, scene_from_dict
+from forming_fenicsx.config.loader import load_scene, scene_from_dict
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 

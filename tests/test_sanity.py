@@ -3,7 +3,7 @@ check is silent below its thresholds, warns between them and fails above, naming
 import pytest
 
 from forming_fenicsx.post.sanity import check_run
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 
 # measured on Example 2 (mu = 0.2, Q2 reduced, h = 0.05) with the default penalties
 NORMAL = {"die_penetration": 2e-5, "relative_divergence": 3e-3, "exit_zone_rate_ratio": 1.5e-5,

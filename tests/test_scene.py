@@ -6,7 +6,7 @@ from mpi4py import MPI
 
 from forming_fenicsx.app.cli import main, petsc_options_from_args
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.config.scene import load_scene, scene_from_dict
+from forming_fenicsx.config.loader import load_scene, scene_from_dict
 
 RANK = MPI.COMM_WORLD.rank
 DEMOS = Path(__file__).parents[1] / "demos"

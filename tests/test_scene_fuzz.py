@@ -11,7 +11,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.config.scene import SECTIONS, key_name, scene_from_dict
+from forming_fenicsx.config.coercion import key_name
+from forming_fenicsx.config.loader import SECTIONS, scene_from_dict
 
 pytestmark = pytest.mark.no_parallel_content  # pure Python (tests/conftest.py)
 

@@ -13,7 +13,7 @@ from mpi4py import MPI
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.fem.projection import project_discontinuous
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.post.sections import mean_axial_stress, values_at
 
 

@@ -22,7 +22,7 @@ from forming_fenicsx.io.output import write_exit_profile
 from forming_fenicsx.mesh.points import PointValues
 from forming_fenicsx.post.postprocess import exit_strain_profile
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import load_scene
+from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.post.streamlines import streamline_strain
 from forming_fenicsx.verification.verification import RADIAL, radial_problem
 from forming_fenicsx.core.compat import trapezoid

@@ -11,7 +11,7 @@ from mpi4py import MPI
 import forming_fenicsx.app.study as study
 from forming_fenicsx.app.cli import main
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.config.scene import read_scene_data
+from forming_fenicsx.config.loader import read_scene_data
 
 DEMOS = Path(__file__).parents[1] / "demos"
 DEMO = str(DEMOS / "example1_extrusion.toml")

@@ -16,7 +16,7 @@ from conftest import make_scene
 from forming_fenicsx.physics.coordinates import CoordinateSystem
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import load_scene, read_scene_data, scene_from_dict
+from forming_fenicsx.config.loader import load_scene, read_scene_data, scene_from_dict
 from forming_fenicsx.coupled.thermal import (TemperatureField, ThermalMaterial, effusivity_share,
                                      scene_temperature_field)
 from forming_fenicsx.verification.thermal_verification import (LEFT, RIGHT, adiabatic, layer, manufactured,
@@ -179,7 +179,7 @@ def test_hot_rod_run_writes_its_temperature(shared_tmp):
 
     from conftest import kept_figures
     from forming_fenicsx.app.run import run_scene
-    from forming_fenicsx.config.scene import load_scene
+    from forming_fenicsx.config.loader import load_scene
 
     demos = Path(__file__).resolve().parents[1] / "demos"
     scene = load_scene(demos / "aluminium_rod_hot.toml", ["discretisation.mesh_size=4"])

@@ -11,7 +11,7 @@ import pytest
 
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.config.scene import read_scene_data, scene_from_dict
+from forming_fenicsx.config.loader import read_scene_data, scene_from_dict
 from forming_fenicsx.core.units import Units
 
 DEMOS = Path(__file__).parents[1] / "demos"

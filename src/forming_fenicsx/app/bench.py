@@ -47,7 +47,7 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     from mpi4py import MPI
 
     from forming_fenicsx.app.run import solve_scene
-    from forming_fenicsx.config.scene import read_scene_data, scene_from_dict
+    from forming_fenicsx.config.loader import read_scene_data, scene_from_dict
     from forming_fenicsx.app.study import exact_value
 
     if "hardening" in case:

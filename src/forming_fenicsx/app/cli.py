@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.core.numbers import fraction, is_number
 
 log = logging.getLogger("forming_fenicsx")
 
@@ -26,7 +27,7 @@ def petsc_options_from_args(args: list[str]) -> dict[str, str]:
         if not key.startswith("-") or len(key) < 2:
             raise SceneError(key, "PETSc options after '--' must look like -name [value]")
         value = ""
-        if i + 1 < len(args) and not (args[i + 1].startswith("-") and not _is_number(args[i + 1])):
+        if i + 1 < len(args) and not (args[i + 1].startswith("-") and not is_number(args[i + 1])):
             value = args[i + 1]
             i += 1
         options[key.lstrip("-")] = value
@@ -34,19 +35,10 @@ def petsc_options_from_args(args: list[str]) -> dict[str, str]:
     return options
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def accuracy_override(text: str) -> str:
     """``--accuracy 1%`` or ``--accuracy 0.01`` as the override accuracy.target=0.01."""
-    percent = text.strip().endswith("%")
     try:
-        value = float(text.strip().removesuffix("%")) / (100 if percent else 1)
+        value = fraction(text)
     except ValueError:
         raise SceneError("--accuracy",
                          f"must be a relative error such as 1% or 0.01; got {text!r}") from None
@@ -151,7 +143,7 @@ def _main(argv: list[str] | None) -> int:
 
     from mpi4py import MPI
 
-    from forming_fenicsx.config.scene import load_scene, read_scene_data
+    from forming_fenicsx.config.loader import load_scene, read_scene_data
 
     comm = MPI.COMM_WORLD
     try:

@@ -1,4 +1,4 @@
-"""Values with units given absolute or relative to one of the scene's scales (scene.Scales)."""
+"""Values with units given absolute or relative to one of the scene's scales (sections.Scales)."""
 from __future__ import annotations
 
 import math

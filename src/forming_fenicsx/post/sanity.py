@@ -29,7 +29,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from forming_fenicsx.config.scene import D_N_RELATIVE, D_RELATIVE, Scene
+from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.config.sections import D_N_RELATIVE, D_RELATIVE
 from forming_fenicsx.solvers.solvers import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)

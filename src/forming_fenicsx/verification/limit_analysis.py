@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.config.scene import DrawingGeometry
+from forming_fenicsx.config.geometry import DrawingGeometry
 
 logger = logging.getLogger(__name__)
 

@@ -17,7 +17,7 @@ from forming_fenicsx.core.compat import GHOST_MODE, mesh_from_gmsh
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
-from forming_fenicsx.config.scene import scene_from_dict
+from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.solvers.newton import NewtonSolver
 from forming_fenicsx.solvers.solvers import SecantSolver
 

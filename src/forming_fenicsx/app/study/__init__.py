@@ -16,14 +16,14 @@ A study stopped and started again skips the runs its study.json already holds.
 from __future__ import annotations
 from forming_fenicsx.app.study.analysis import (ERROR_LEVELS, MESH_KEYS, QUANTITIES, cheapest,
                                                 exact_value, find_optima, interior_minimum,
-                                                is_design_key, numeric, positions, references,
+                                                is_design_key, positions, references,
                                                 relative_error, series, value)
 from forming_fenicsx.app.study.grid import (load_study, parse_quantities, parse_vary, run_folder,
                                             run_study, solve_scene, study_scenes)
 from forming_fenicsx.app.study.report import report
 
 __all__ = ["ERROR_LEVELS", "MESH_KEYS", "QUANTITIES", "cheapest", "exact_value", "find_optima",
-           "interior_minimum", "is_design_key", "load_study", "numeric", "parse_quantities",
+           "interior_minimum", "is_design_key", "load_study", "parse_quantities",
            "parse_vary", "positions", "references", "relative_error", "report", "run_folder",
            "run_study", "series", "solve_scene", "study_scenes", "value"]
 

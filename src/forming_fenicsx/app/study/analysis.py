@@ -11,10 +11,10 @@ from pathlib import Path
 from typing import Any
 from mpi4py import MPI
 from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.core.numbers import is_number
 from forming_fenicsx.io.output import json_safe
 from forming_fenicsx.core.report import markdown_table, richardson
 from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.config.scene import Scene, apply_overrides, parse_override, read_scene_data, scene_from_dict
 from forming_fenicsx.core.units import Units
 
 
@@ -146,18 +146,9 @@ def positions(rows: list[dict[str, Any]], parameter: str) -> dict[str, float]:
     """Where each value of ``parameter`` sits on the plot's axis: the number itself, or for values
     that are not all numbers (e.g. friction.law) their index in the order of the grid."""
     values = list(dict.fromkeys(row["settings"][parameter] for row in rows))
-    if all(numeric(v) for v in values):
+    if all(is_number(v) for v in values):
         return {v: float(v) for v in values}
     return {v: float(i) for i, v in enumerate(values)}
-
-
-def numeric(text: str) -> bool:
-    """Whether a --vary value is a number."""
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def series(rows: list[dict[str, Any]], quantity: str, keys: list[str]
@@ -201,7 +192,7 @@ def find_optima(rows: list[dict[str, Any]], quantities: list[str], keys: list[st
     three points of the parabola; None each where there is none, and for a parameter whose values
     are not numbers)."""
     parameter = next(k for k in keys if is_design_key(k))
-    numbers = all(numeric(row["settings"][parameter]) for row in rows)
+    numbers = all(is_number(row["settings"][parameter]) for row in rows)
     found = []
     for quantity in quantities:
         for label, xs, ys, kind in series(rows, quantity, keys):

@@ -9,7 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from forming_fenicsx.app.study.analysis import MESH_KEYS, is_design_key, numeric, positions, relative_error, series
+from forming_fenicsx.app.study.analysis import (MESH_KEYS, is_design_key, positions, relative_error,
+                                                series)
+from forming_fenicsx.core.numbers import is_number
 from forming_fenicsx.core.units import Units
 
 NOT_LENGTHS = ("symmetry", "die", "mesh_file", "die_profile_file")
@@ -66,7 +68,7 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
                         color=drawn.get_color(), markeredgecolor="k",
                         label=f"optimum {optimum['location']:.4g}: {optimum['value']:.4g}")
         where = positions(rows, parameter)
-        if not all(numeric(v) for v in where):  # categories: their names at their places
+        if not all(is_number(v) for v in where):  # categories: their names at their places
             ax.set_xticks(list(where.values()), list(where))
         ax.set_xlabel(parameter_label(parameter, units))
         unit = units.label(units.dimension(quantity, whole_forces))

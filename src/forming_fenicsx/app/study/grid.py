@@ -14,7 +14,9 @@ from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.io.output import json_safe
 from forming_fenicsx.core.report import markdown_table, richardson
 from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.config.scene import Scene, apply_overrides, parse_override, read_scene_data, scene_from_dict
+from forming_fenicsx.config.loader import (apply_overrides, parse_override, read_scene_data,
+                                           scene_from_dict)
+from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.core.units import Units
 from forming_fenicsx.app.study.analysis import QUANTITIES, settings_key, exact_value, find_optima, has_reference, is_design_key, references, value
 from forming_fenicsx.app.study.report import write_csv, report

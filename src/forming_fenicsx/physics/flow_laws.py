@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, Self
 
 import numpy as np
 import ufl
@@ -18,12 +18,24 @@ import ufl
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.relative import resolve_pair
 
-RATE_FLOOR_RELATIVE = 1e-6  # the power law's default rate floor, relative to the process strain rate
+RATE_FLOOR_RELATIVE = 1e-6  # the default rate floor, relative to the process strain rate
+
+
+class _RateFloor:
+    """A law linear in the rate below ``rate_floor``, absolute or ``rate_floor_relative`` times
+    the process strain rate: the floor keeps the secant bounded at rate 0, as (2.10) needs."""
+
+    def resolve(self, process_rate: float) -> Self:
+        """The law with its rate floor absolute (and relative to the process strain rate)."""
+        floor, relative = resolve_pair("material", self, "rate_floor", process_rate,
+                                       RATE_FLOOR_RELATIVE)
+        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
 
 
 @dataclass(frozen=True)
 class PiecewisePowerLaw:
-    """The paper's law (4.5): linear below rate1, A*rate**alpha on [rate1, rate2], linear above rate2."""
+    """The paper's law (4.5): linear below rate1, A*rate**alpha on [rate1, rate2], linear above
+    rate2."""
 
     A: float = math.sqrt(3.0)
     alpha: float = 1e-3
@@ -36,12 +48,15 @@ class PiecewisePowerLaw:
     def check(self, section: str = "material") -> None:
         """Reject parameters that break (2.10)."""
         if not self.A > 0:
-            raise SceneError(f"{section}.A", f"must be > 0 (a positive flow stress scale); got {self.A}")
+            raise SceneError(f"{section}.A",
+                             f"must be > 0 (a positive flow stress scale); got {self.A}")
         if not 0 < self.alpha <= 1:
             raise SceneError(f"{section}.alpha",
-                             f"must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); got {self.alpha}")
+                             "must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); "
+                             f"got {self.alpha}")
         if not self.rate1 > 0:
-            raise SceneError(f"{section}.rate1", f"must be > 0 for (2.10) (bounded secant); got {self.rate1}")
+            raise SceneError(f"{section}.rate1",
+                             f"must be > 0 for (2.10) (bounded secant); got {self.rate1}")
         if not self.rate2 > self.rate1:
             raise SceneError(f"{section}.rate2",
                              f"must be > material.rate1 ({self.rate1}); got {self.rate2}")
@@ -73,11 +88,13 @@ class PiecewisePowerLaw:
     def potential_ufl(self, rate, strain=None, temperature=None):
         """W(rate) = int_0^rate sigma_p(s) ds of (4.5), whose derivative is sigma_p: the dissipation
         potential minimised by the solution (the energy of the Newton line search)."""
-        g1, g2 = self.A * self.rate1 ** (self.alpha - 1.0), self.A * self.rate2 ** (self.alpha - 1.0)
+        g1 = self.A * self.rate1 ** (self.alpha - 1.0)
+        g2 = self.A * self.rate2 ** (self.alpha - 1.0)
         w1 = g1 * self.rate1**2 / 2
 
         def power(r):
-            return self.A * (r ** (self.alpha + 1.0) - self.rate1 ** (self.alpha + 1.0)) / (self.alpha + 1.0)
+            return (self.A * (r ** (self.alpha + 1.0) - self.rate1 ** (self.alpha + 1.0))
+                    / (self.alpha + 1.0))
 
         w2 = w1 + power(self.rate2)
         return ufl.conditional(ufl.lt(rate, self.rate1), g1 * rate**2 / 2,
@@ -86,7 +103,7 @@ class PiecewisePowerLaw:
 
 
 @dataclass(frozen=True)
-class PowerLaw:
+class PowerLaw(_RateFloor):
     """The strain-rate power law sigma_p = A*rate**n (``law = "rate_power"``: no strain hardening;
     Hollomon's K eps^n is ``law = "hollomon"``), with a floor rate_floor below which the secant is
     constant.
@@ -105,20 +122,17 @@ class PowerLaw:
     hardens: ClassVar[bool] = False
     heats: ClassVar[bool] = False
 
-    def resolve(self, process_rate: float) -> PowerLaw:
-        """The law with its rate floor absolute (and relative to the process strain rate)."""
-        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
-        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
-
     def check(self, section: str = "material") -> None:
         """Reject parameters that break (2.10)."""
         if not self.A > 0:
-            raise SceneError(f"{section}.A", f"must be > 0 (a positive flow stress scale); got {self.A}")
+            raise SceneError(f"{section}.A",
+                             f"must be > 0 (a positive flow stress scale); got {self.A}")
         if not 0 < self.n <= 1:
-            raise SceneError(f"{section}.n", f"must lie in (0, 1] for (2.10) (sigma_p' <= sigma_p/rate); got {self.n}")
+            raise SceneError(f"{section}.n", "must lie in (0, 1] for (2.10) "
+                             f"(sigma_p' <= sigma_p/rate); got {self.n}")
         if not (self.rate_floor is not None and self.rate_floor > 0):
-            raise SceneError(f"{section}.rate_floor",
-                             f"must be > 0: it bounds the secant at zero rate (2.10); got {self.rate_floor}")
+            raise SceneError(f"{section}.rate_floor", "must be > 0: it bounds the secant at zero "
+                             f"rate (2.10); got {self.rate_floor}")
 
     def flow_stress(self, rate: np.ndarray) -> np.ndarray:
         """sigma_p(rate), linear below rate_floor."""
@@ -129,7 +143,8 @@ class PowerLaw:
         return self.A * np.maximum(np.asarray(rate, dtype=float), self.rate_floor) ** (self.n - 1.0)
 
     def secant_ufl(self, rate, strain=None, temperature=None):
-        """G(rate) as a UFL expression, for evaluation at quadrature points (no strain dependence)."""
+        """G(rate) as a UFL expression, for evaluation at quadrature points (no strain
+        dependence)."""
         return self.A * ufl.max_value(rate, self.rate_floor) ** (self.n - 1.0)
 
     def potential_ufl(self, rate, strain=None, temperature=None):
@@ -137,7 +152,8 @@ class PowerLaw:
         g = self.A * self.rate_floor ** (self.n - 1.0)
         w1 = g * self.rate_floor**2 / 2
         return ufl.conditional(ufl.lt(rate, self.rate_floor), g * rate**2 / 2,
-                               w1 + self.A * (rate ** (self.n + 1.0) - self.rate_floor ** (self.n + 1.0))
+                               w1 + self.A * (rate ** (self.n + 1.0)
+                                              - self.rate_floor ** (self.n + 1.0))
                                / (self.n + 1.0))
 
 
@@ -148,10 +164,11 @@ RATE_FACTORS = ("none", "power", "log")
 
 
 @dataclass(frozen=True)
-class _Hardening:
-    """sigma_p(rate, eps) = H(eps) r(rate): a hardening curve H of the equivalent strain times a rate
-    factor r with r(reference_rate) = 1:
-    - ``rate_factor = "none"``: r = (rate/ref)^1e-3 (rate-independent up to the exponent (2.10) needs),
+class _Hardening(_RateFloor):
+    """sigma_p(rate, eps) = H(eps) r(rate): a hardening curve H of the equivalent strain times a
+    rate factor r with r(reference_rate) = 1:
+    - ``rate_factor = "none"``: r = (rate/ref)^1e-3 (rate-independent up to the exponent (2.10)
+      needs),
     - ``"power"``: r = (rate/ref)^m, 0 < m <= 1,
     - ``"log"``: r = 1 + C ln(rate/ref) above ref (Johnson-Cook), (rate/ref)^C below, 0 < C <= 1,
     each linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the
@@ -182,11 +199,6 @@ class _Hardening:
         """Whether the law reads the temperature: with a softening factor."""
         return self.softening is not None
 
-    def resolve(self, process_rate: float):
-        """The law with its rate floor absolute (and relative to the process strain rate)."""
-        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
-        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
-
     def check(self, section: str = "material") -> None:
         """The rate factor's parameters (2.10), then the hardening curve's (_check_curve)."""
         if self.rate_factor not in RATE_FACTORS:
@@ -199,14 +211,16 @@ class _Hardening:
                 raise SceneError(f"{section}.{key}", f"does not apply to rate_factor = "
                                  f"{self.rate_factor!r}; leave it out")
             if key == needed and not (value is not None and 0 < value <= 1):
-                raise SceneError(f"{section}.{key}", f"must lie in (0, 1] for (2.10) (sigma_p rising "
-                                 f"with the rate, sigma_p/rate falling); got {value}")
+                raise SceneError(f"{section}.{key}", "must lie in (0, 1] for (2.10) (sigma_p "
+                                 f"rising with the rate, sigma_p/rate falling); got {value}")
         for key in ("reference_rate", "rate_floor"):
             if not (getattr(self, key) is not None and getattr(self, key) > 0):
-                raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {getattr(self, key)}")
+                raise SceneError(f"{section}.{key}",
+                                 f"must be a finite number > 0; got {getattr(self, key)}")
         if (self.softening is None) != (self.softening_temperature is None):
-            raise SceneError(f"{section}.softening", "give softening (1/K) and softening_temperature "
-                             "(K, where the factor is 1) together, or neither")
+            raise SceneError(f"{section}.softening", "give softening (1/K) and "
+                             "softening_temperature (K, where the factor is 1) together, or "
+                             "neither")
         if self.softening is not None:
             if not self.softening >= 0:
                 raise SceneError(f"{section}.softening", f"must be a finite number >= 0 (1/K); got "
@@ -217,8 +231,8 @@ class _Hardening:
                              f"must be a finite number >= 0; got {self.initial_strain}")
         if self.initial_strain_file is not None:
             if self.initial_strain != 0:
-                raise SceneError(f"{section}.initial_strain", "give the inflow strain as a number or "
-                                 f"as {section}.initial_strain_file (a profile), not both")
+                raise SceneError(f"{section}.initial_strain", "give the inflow strain as a number "
+                                 f"or as {section}.initial_strain_file (a profile), not both")
         self._check_curve(section)
 
     def _thermal(self, temperature, lib):
@@ -281,7 +295,8 @@ class _Hardening:
         if self.rate_factor == "log" and f < ref:
             upper = ufl.conditional(
                 ufl.lt(rate, ref), power_integral(f, rate),
-                power_integral(f, ref) + (rate - ref) + self.C * (rate * ufl.ln(rate / ref) - rate + ref))
+                power_integral(f, ref) + (rate - ref)
+                + self.C * (rate * ufl.ln(rate / ref) - rate + ref))
         elif self.rate_factor == "log":  # the floor above ref: only the logarithmic branch
             upper = (rate - f) + self.C * (rate * ufl.ln(rate / ref) - rate
                                            - f * math.log(f / ref) + f)
@@ -320,7 +335,8 @@ class HollomonLaw(_Hardening):
     def _check_curve(self, section: str) -> None:
         _check_positive(section, "K", self.K)
         if not (self.n is not None and 0 <= self.n < 1):
-            raise SceneError(f"{section}.n", f"must lie in [0, 1) (Hollomon's exponent); got {self.n}")
+            raise SceneError(f"{section}.n",
+                             f"must lie in [0, 1) (Hollomon's exponent); got {self.n}")
         _check_positive(section, "strain_floor", self.strain_floor)
 
     def hardening(self, strain, lib):
@@ -359,8 +375,8 @@ class VoceLaw(_Hardening):
         _check_positive(section, "initial", self.initial)
         _check_positive(section, "scale", self.scale)
         if not (self.saturation is not None and self.saturation >= self.initial):
-            raise SceneError(f"{section}.saturation", f"must be >= material.initial ({self.initial}): "
-                             f"Voce's curve rises to it; got {self.saturation}")
+            raise SceneError(f"{section}.saturation", "must be >= material.initial "
+                             f"({self.initial}): Voce's curve rises to it; got {self.saturation}")
 
     def hardening(self, strain, lib):
         return self.saturation - (self.saturation - self.initial) * lib.exp(
@@ -368,19 +384,21 @@ class VoceLaw(_Hardening):
 
 
 R_GAS = 8.314  # J/(mol K)
-POTENTIAL_POINTS = 8  # Gauss-Legendre points of the Sellars-Tegart potential (the line search's merit)
+# Gauss-Legendre points of the Sellars-Tegart potential (the line search's merit)
+POTENTIAL_POINTS = 8
 
 
 @dataclass(frozen=True)
-class SellarsTegartLaw:
+class SellarsTegartLaw(_RateFloor):
     """Sellars-Tegart (Zener-Hollomon), the hot-working law of reference section 4:
-    sigma_p = (1/alpha_s) asinh((Z/A)^(1/n)), Z = rate exp(Q/(R T)), R = 8.314 J/(mol K), T in kelvin,
-    linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the process
-    strain rate) where (2.10) needs a bounded secant; n >= 1 keeps sigma_p/rate falling. ``alpha_s``
-    in 1/stress, ``A`` in 1/time, ``Q`` in J/mol. The temperature is the scene's [thermal] field
-    (coupled to the flow), or ``temperature``, the workpiece's, isothermal; with [thermal] it is the
-    inflow temperature, for the scene's scales. Its dissipation potential has no closed form: Newton's
-    line search evaluates it by Gauss-Legendre quadrature in ln(rate) (its residual is exact)."""
+    sigma_p = (1/alpha_s) asinh((Z/A)^(1/n)), Z = rate exp(Q/(R T)), R = 8.314 J/(mol K), T in
+    kelvin, linear in the rate below ``rate_floor`` (absolute, or ``rate_floor_relative`` times the
+    process strain rate) where (2.10) needs a bounded secant; n >= 1 keeps sigma_p/rate falling.
+    ``alpha_s`` in 1/stress, ``A`` in 1/time, ``Q`` in J/mol. The temperature is the scene's
+    [thermal] field (coupled to the flow), or ``temperature``, the workpiece's, isothermal; with
+    [thermal] it is the inflow temperature, for the scene's scales. Its dissipation potential has no
+    closed form: Newton's line search evaluates it by Gauss-Legendre quadrature in ln(rate) (its
+    residual is exact)."""
 
     alpha_s: float | None = None
     n: float | None = None
@@ -393,11 +411,6 @@ class SellarsTegartLaw:
     law: str = "sellars_tegart"
     hardens: ClassVar[bool] = False
     heats: ClassVar[bool] = True
-
-    def resolve(self, process_rate: float) -> SellarsTegartLaw:
-        """The law with its rate floor absolute (and relative to the process strain rate)."""
-        floor, relative = resolve_pair("material", self, "rate_floor", process_rate, RATE_FLOOR_RELATIVE)
-        return dataclasses.replace(self, rate_floor=floor, rate_floor_relative=relative)
 
     def check(self, section: str = "material") -> None:
         for key in ("alpha_s", "A", "temperature", "rate_floor"):
@@ -418,7 +431,8 @@ class SellarsTegartLaw:
         rate = np.asarray(rate, dtype=float)
         floored = np.maximum(rate, self.rate_floor)
         with np.errstate(over="ignore"):  # an infinite stress: the scene check names the law
-            value = self._sigma(floored, self.temperature if temperature is None else temperature, np)
+            temperature = self.temperature if temperature is None else temperature
+            value = self._sigma(floored, temperature, np)
         return value * np.minimum(rate / self.rate_floor, 1.0)
 
     def secant(self, rate: np.ndarray, strain=None, temperature=None) -> np.ndarray:
@@ -456,28 +470,3 @@ LAWS = {"piecewise_power": PiecewisePowerLaw, "rate_power": PowerLaw, "hollomon"
         "swift": SwiftLaw, "voce": VoceLaw, "sellars_tegart": SellarsTegartLaw}
 FlowLaw = PiecewisePowerLaw | PowerLaw | HollomonLaw | SwiftLaw | VoceLaw | SellarsTegartLaw
 
-
-# Named materials a scene cites by ``material.name`` (values in MPa; any key overrides)
-MATERIALS: dict[str, dict] = {
-    "copper_annealed": {"law": "hollomon", "K": 315.0, "n": 0.54},
-    "low_carbon_steel_annealed": {"law": "hollomon", "K": 530.0, "n": 0.26},
-    "aluminium_1100_O": {"law": "hollomon", "K": 180.0, "n": 0.20},
-    "aluminium_6061_O": {"law": "hollomon", "K": 205.0, "n": 0.20},
-    "aluminium_2024_T4": {"law": "hollomon", "K": 690.0, "n": 0.16},
-    "stainless_304_annealed": {"law": "hollomon", "K": 1275.0, "n": 0.45},
-}
-MATERIAL_SOURCES = {name: "Kalpakjian & Schmid, Manufacturing Engineering and Technology, Table 2.3 "
-                    "(room temperature)" for name in MATERIALS}
-# hot working (MPa, 1/s, J/mol): the scene must say units.stress = MPa and units.time = s
-MATERIALS["AA6063"] = {"law": "sellars_tegart", "alpha_s": 0.040, "n": 5.385, "Q": 141550.0,
-                       "A": math.exp(22.5)}
-MATERIALS["AA6060"] = {"law": "sellars_tegart", "alpha_s": 0.035, "n": 4.67, "Q": 161000.0,
-                       "A": 7.6301e10}
-MATERIAL_SOURCES["AA6063"] = "Sheppard, Extrusion of Aluminium Alloys (1999), Table 4.1"
-MATERIAL_SOURCES["AA6060"] = "Verlinden (1993)"
-# Solidus temperatures (K) of the named materials: a [thermal] run whose workpiece passes it melts
-# (ASM Handbook Vol. 2, Properties of Wrought Aluminum and Aluminum Alloys; ASM Metals Handbook
-# Desk Edition: copper's melting point, carbon and 304 stainless steels' solidus)
-SOLIDUS = {"copper_annealed": 1356.0, "low_carbon_steel_annealed": 1768.0,
-           "aluminium_1100_O": 916.0, "aluminium_6061_O": 855.0, "aluminium_2024_T4": 775.0,
-           "stainless_304_annealed": 1673.0, "AA6063": 888.0, "AA6060": 858.0}
