@@ -29,12 +29,13 @@ COLUMNS = ("drawing_stress", "mean_entry_strain", "mean_exit_strain", "redundant
 def run_schedule(out: Path, overrides: list[str] | None = None, scene: Path = SCENE) -> list[dict]:
     """Run the passes of ``scene`` in order into out/pass1, out/pass2, ...; returns their
     summaries."""
-    summaries = []
+    summaries, out = [], Path(out).resolve()  # the next pass reads the CSV from its scene's folder
     for number, (entry, exit_) in enumerate(zip(DIAMETERS, DIAMETERS[1:]), start=1):
         settings = [f"geometry.entry_diameter={entry}", f"geometry.exit_diameter={exit_}",
                     *(overrides or [])]
         if summaries:
-            settings.append(f"material.initial_strain_file=\"{out / f'pass{number - 1}' / 'exit_strain.csv'}\"")
+            previous = out / f"pass{number - 1}" / "exit_strain.csv"
+            settings.append(f"material.initial_strain_file=\"{previous}\"")
         summaries.append(run_scene(load_scene(scene, settings), out / f"pass{number}",
                                    title=f"pass {number}", overwrite=True))
     return summaries
