@@ -19,7 +19,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from forming_fenicsx.solvers.accuracy import estimate, relative, solve_to_accuracy
+from forming_fenicsx.core.richardson import estimate, relative
+from forming_fenicsx.solvers.accuracy import solve_to_accuracy
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import load_scene

@@ -12,8 +12,9 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.post.postprocess import ram_face_pressure_model
-from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.post.ram_face import ram_face_pressure_model
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.core.richardson import richardson
 from forming_fenicsx.app.run import solve_scene
 
 HILL = 1 + math.pi / 2
@@ -49,7 +50,7 @@ for size in args.sizes if "mesh" in args.parts else []:
     results["mesh"].append({"mesh_size": size, **s})
 if len(results["mesh"]) >= 3:
     pressures = [r["ram_pressure"] for r in results["mesh"]]
-    limit, order = richardson(pressures)
+    limit, order = richardson([r["mesh_size"] for r in results["mesh"]], pressures)
     results["extrapolated_ram_pressure"] = {"value": limit, "order": order, "hill": HILL,
                                             "relative_error": limit / HILL - 1}
     table(f"Ram pressure, mu = 0, Q2 reduced, grading {args.grading} (Hill {HILL:.4f})",

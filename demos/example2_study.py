@@ -12,7 +12,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.core.richardson import richardson
 from forming_fenicsx.app.run import solve_scene
 
 PAPER_Q = {0.0: 243.0, 0.2: 255.0, 0.4: 273.0}
@@ -64,7 +65,7 @@ for mu in args.mu if "table" in args.parts else []:
         results["table"].extend(rows)
         if len(rows) >= 3:
             for key in ("mean_die_pressure", "drawing_stress", "projected_die_pressure"):
-                limit, order = richardson([r[key] for r in rows])
+                limit, order = richardson(args.sizes, [r[key] for r in rows])
                 results["extrapolated"].append({"mu": mu, "element": element, "quantity": key, "value": limit,
                                                 "order": order})
 table("q_av and drawing stress (direct method to delta = 1e-4 and force balance < 1e-3)",
@@ -136,7 +137,7 @@ for size_e in args.sizes if "exact" in args.parts else []:
 if len(results["exact"]) >= 3:
     limits = {}
     for key in ("mean_die_pressure", "drawing_stress"):
-        limits[key], order = richardson([r[key] for r in results["exact"]])
+        limits[key], order = richardson(args.sizes, [r[key] for r in results["exact"]])
         results["extrapolated"].append({"mu": 0.0, "element": "Q2 reduced", "quantity": f"exact-field {key}",
                                         "value": limits[key], "order": order})
     results["exact"].append({"mesh_size": "extrapolated", **limits})
@@ -160,7 +161,7 @@ for case, exit_thickness, reference in (("exact field", h0 * (1 - r_exact), exac
             rows.append({"case": case, "averaging": averaging, "rate2": rate2, "mesh_size": size_s,
                          "reference": reference, **s})
         if len(rows) >= 3:
-            limit, order = richardson([r["mean_die_pressure"] for r in rows])
+            limit, order = richardson(args.sizes, [r["mean_die_pressure"] for r in rows])
             rows.append({"case": case, "averaging": averaging, "rate2": rate2, "mesh_size": "extrapolated",
                          "reference": reference, "mean_die_pressure": limit, "order": order})
         results["secant"].extend(rows)

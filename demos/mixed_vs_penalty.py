@@ -21,7 +21,8 @@ import dolfinx.fem.petsc
 
 from forming_fenicsx import load_scene
 from forming_fenicsx.fem.projection import cell_means
-from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.core.report import markdown_table
+from forming_fenicsx.core.richardson import richardson
 from forming_fenicsx.app.run import solve_scene
 
 DEMOS = Path(__file__).parent
@@ -68,7 +69,7 @@ def main() -> None:
             case_rows.append({"case": title, "formulation": "penalty", "d": d, **summary, "field_difference": difference})
         # O(d): the limit from the three smallest d (the extrapolation needs no particular ratio), or the
         # smallest d's value where rounding makes the differences non-monotone
-        limit = richardson([r[quantity] for r in case_rows[-3:]])[0]
+        limit = richardson([r["d"] for r in case_rows], [r[quantity] for r in case_rows])[0]
         limit = limit if np.isfinite(limit) else case_rows[-1][quantity]
         mixed.update(case=title, formulation="mixed", d=0.0, field_difference=0.0)
         for row in [*case_rows, mixed]:

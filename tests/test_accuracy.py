@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.solvers.accuracy import (FACTOR, MIN_ORDER, estimate, next_mesh_size, observed_order,
-                                      relative)
+from forming_fenicsx.core.richardson import FACTOR, MIN_ORDER, estimate, observed_order, relative
+from forming_fenicsx.solvers.accuracy import next_mesh_size
 from forming_fenicsx.app.cli import accuracy_override, main
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.fem.forms import FlowProblem

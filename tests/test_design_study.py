@@ -13,7 +13,7 @@ from mpi4py import MPI
 import forming_fenicsx.app.run as run
 import forming_fenicsx.app.study as study
 from forming_fenicsx.app.cli import main
-from forming_fenicsx.io.plotting import Heading
+from forming_fenicsx.io.figure import Heading
 from forming_fenicsx.app.study.figures import quantity_plots
 from forming_fenicsx.core.units import Units
 

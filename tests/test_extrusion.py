@@ -5,7 +5,7 @@ import math
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.post.postprocess import ram_face_pressure_model
+from forming_fenicsx.post.ram_face import ram_face_pressure_model
 from forming_fenicsx.app.run import solve_scene
 
 from conftest import make_scene, solved

@@ -17,8 +17,10 @@ from conftest import kept_figures
 from mpi4py import MPI
 
 from forming_fenicsx import load_scene
-from forming_fenicsx.io.plotting import (DIE_PARTS, MAX_GAP, Heading, die_body, die_parts, flow_lines,
-                                      not_converged, run_settings, write_die_plot)
+from forming_fenicsx.io.die_plot import DIE_PARTS, die_parts, write_die_plot
+from forming_fenicsx.io.figure import Heading, not_converged, run_settings
+from forming_fenicsx.io.flow_lines import MAX_GAP, flow_lines
+from forming_fenicsx.io.maps import die_body
 from forming_fenicsx.app.run import run_scene
 
 DEMOS = Path(__file__).parents[1] / "demos"
@@ -300,7 +302,7 @@ def test_surface_cell_depth_is_the_exit_element():
     the element at the product's surface (exit radius 6 mm) is 6/9 mm deep; exit_strain.png
     shades it."""
     from forming_fenicsx.mesh.geometry import build_mesh
-    from forming_fenicsx.post.postprocess import surface_cell_depth
+    from forming_fenicsx.post.exit_profiles import surface_cell_depth
 
     scene = load_scene(Path(__file__).parents[1] / "demos" / "aluminium_rod_cold.toml")
     g = scene.geometry

@@ -11,7 +11,7 @@ from forming_fenicsx.core.compat import set_at_quadrature_points
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.solvers.newton import NewtonSolver
-from forming_fenicsx.post.postprocess import scalars
+from forming_fenicsx.post.summary import scalars
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.solvers.solvers import LinearSolver, SecantSolver, diverging, stalled
 

@@ -1,5 +1,5 @@
 """The strain along the streamlines (streamlines.py) and the product's strain profile written for
-the next pass (postprocess.exit_strain_profile): against the exact cone flow of reference section
+the next pass (exit_profiles.exit_strain_profile): against the exact cone flow of reference section
 1, on the steel wire of docs/hardening.md (issue 34: the strain dipped in the outermost element),
 read back by the next pass; and the point evaluation on any number of ranks behind it (points.py).
 """
@@ -20,7 +20,7 @@ from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.solvers.newton import NewtonSolver
 from forming_fenicsx.io.output import write_exit_profile
 from forming_fenicsx.mesh.points import PointValues
-from forming_fenicsx.post.postprocess import exit_strain_profile
+from forming_fenicsx.post.exit_profiles import exit_strain_profile
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.post.streamlines import streamline_strain
@@ -108,12 +108,12 @@ def test_exit_strain_profile_of_the_steel_wire(steel):
 def test_a_lost_streamline_takes_the_transported_strain(steel, monkeypatch, caplog):
     """A streamline that does not reach the entry (nan) is written as the transported strain,
     with a warning."""
-    import forming_fenicsx.post.streamlines as streamlines
+    import forming_fenicsx.post.exit_profiles as exit_profiles
 
     problem, _, _ = steel
-    monkeypatch.setattr(streamlines, "streamline_strain",
+    monkeypatch.setattr(exit_profiles, "streamline_strain",
                         lambda problem, points: np.full(len(points), np.nan))
-    with caplog.at_level(logging.WARNING, logger="forming_fenicsx.post.postprocess"):
+    with caplog.at_level(logging.WARNING, logger="forming_fenicsx.post.exit_profiles"):
         profile = exit_strain_profile(problem)
     if MPI.COMM_WORLD.rank == 0:
         assert np.array_equal(profile["streamlines"], profile["transported"])

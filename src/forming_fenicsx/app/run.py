@@ -13,27 +13,34 @@ from typing import Any, Callable
 import dolfinx
 from mpi4py import MPI
 
-from forming_fenicsx.solvers.accuracy import solve_to_accuracy
+from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.core.units import DIMENSIONS
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.io.die_plot import write_die_plot
+from forming_fenicsx.io.figure import Heading
+from forming_fenicsx.io.maps import write_figures
+from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_profile,
+                                       write_exit_profile, write_fields, write_history,
+                                       write_summary)
+from forming_fenicsx.io.profile_plot import write_exit_profile_plot
 from forming_fenicsx.mesh.geometry import build_mesh
-from forming_fenicsx.solvers.newton import NewtonSolver
-from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_profile, write_exit_profile, write_fields,
-                     write_history, write_summary)
-from forming_fenicsx.io.plotting import Heading, write_die_plot, write_exit_profile_plot, write_figures
-from forming_fenicsx.post.postprocess import (die_profile, exit_profile, exit_strain_profile, force_balance,
-                          output_fields, scalars)
-from forming_fenicsx.post.sanity import check_run
-from forming_fenicsx.core.units import DIMENSIONS
-from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.solvers.solvers import SecantSolver, SolveResult
 from forming_fenicsx.mesh.transfer import transfer
+from forming_fenicsx.post.die import die_profile
+from forming_fenicsx.post.exit_profiles import exit_profile, exit_strain_profile
+from forming_fenicsx.post.forces import force_balance
+from forming_fenicsx.post.output_fields import output_fields
+from forming_fenicsx.post.sanity import check_run
+from forming_fenicsx.post.summary import scalars
+from forming_fenicsx.solvers.accuracy import solve_to_accuracy
+from forming_fenicsx.solvers.choice import solver_for
+from forming_fenicsx.solvers.solvers import SolveResult
 
 log = logging.getLogger(__name__)
 
 
-def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
-                stop: Callable[[], str | None] | None = None,
+def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
+                comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None,
                 restart: Path | None = None, previous: dolfinx.fem.Function | None = None
                 ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
@@ -52,8 +59,8 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     elif previous is not None:
         initial = problem.u.copy()
         transfer(previous, initial)
-    method = NewtonSolver if scene.solver.method == "newton" else SecantSolver
-    solver = method(problem, petsc_options, balance=lambda: force_balance(problem)[0], stop=stop)
+    solver = solver_for(problem, petsc_options, balance=lambda: force_balance(problem)[0],
+                        stop=stop)
     setup = time.perf_counter() - start
     result = solver.solve(initial)
     solver.destroy()
@@ -79,10 +86,11 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None, comm:
     return problem, result, summarise(body, result, scene, comm)
 
 
-def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
+def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm
+              ) -> dict[str, Any]:
     """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
-    converged (a failed check means it did not, whatever the iteration did) and why, the units, then the
-    run's numbers. The reason leads with what the run measured: a failed check of a converged
+    converged (a failed check means it did not, whatever the iteration did) and why, the units, then
+    the run's numbers. The reason leads with what the run measured: a failed check of a converged
     iteration, or a cause (the law's rate window, drawability) found at the last iterate of one that
     stopped, before the iteration's own reason. Warnings are logged on rank 0 (a failure is the
     reason the command prints)."""
@@ -91,13 +99,15 @@ def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI
     converged = result.converged and not failures
     cause = next((f.message for f in findings if f.cause), None)
     if result.converged and failures:
-        reason = f"the iteration converged ({result.reason}), but the answer cannot be right: {failures[0]}"
+        reason = (f"the iteration converged ({result.reason}), but the answer cannot be right: "
+                  f"{failures[0]}")
     elif not result.converged and cause is not None:
         reason = f"{cause} (the iteration stopped: {result.reason})"
     else:
         reason = result.reason
-    summary = {"warnings": [f.message for f in findings if not f.failure], "failed_checks": failures,
-               "converged": converged, "reason": reason, "iteration_converged": result.converged,
+    summary = {"warnings": [f.message for f in findings if not f.failure],
+               "failed_checks": failures, "converged": converged, "reason": reason,
+               "iteration_converged": result.converged,
                "units": scene.units.summary(list(body), scene.geometry.whole_forces), **body}
     if comm.rank == 0:
         for text in summary["warnings"]:
@@ -112,18 +122,21 @@ def time_split(comm: MPI.Comm, setup: float, result: SolveResult, post: float) -
     timings = result.timings
     rest = result.iteration_time - timings.assembly - timings.factorisation - timings.solve
     return {key: comm.allreduce(value, op=MPI.MAX) for key, value in
-            (("setup", setup), ("assembly", timings.assembly), ("factorisation", timings.factorisation),
-             ("solve", timings.solve), ("rest", rest), ("postprocess", post))}
+            (("setup", setup), ("assembly", timings.assembly),
+             ("factorisation", timings.factorisation), ("solve", timings.solve), ("rest", rest),
+             ("postprocess", post))}
 
 
 def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | None = None,
               comm: MPI.Comm = MPI.COMM_WORLD, title: str = "", overwrite: bool = False,
-              stop: Callable[[], str | None] | None = None, restart: Path | None = None) -> dict[str, Any]:
-    """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into ``out``.
+              stop: Callable[[], str | None] | None = None, restart: Path | None = None
+              ) -> dict[str, Any]:
+    """Solve a scene and write summary.json, history.csv, die.csv, fields.xdmf and the figures into
+    ``out``.
 
-    The files are written into a hidden staging folder beside ``out`` and moved into place only when
-    all are complete, so ``out`` never holds a half-written run. An existing ``out`` is replaced only
-    with ``overwrite`` (FileExistsError otherwise, before any work).
+    The files are written into a hidden staging folder beside ``out`` and moved into place only
+    when all are complete, so ``out`` never holds a half-written run. An existing ``out`` is
+    replaced only with ``overwrite`` (FileExistsError otherwise, before any work).
     """
     out = Path(out)
     exists = comm.bcast(out.exists() if comm.rank == 0 else None, root=0)
@@ -153,7 +166,10 @@ def run_scene(scene: Scene, out: str | Path, petsc_options: dict[str, Any] | Non
 
 
 def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | None, comm: MPI.Comm,
-                     title: str, stop: Callable[[], str | None] | None, restart: Path | None) -> dict[str, Any]:
+                     title: str, stop: Callable[[], str | None] | None, restart: Path | None
+                     ) -> dict[str, Any]:
+    """Solve the scene (once, or on finer meshes to accuracy.target) and write every file of the
+    run into ``out``; returns the summary."""
     if scene.accuracy.target is None:
         problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
     else:
@@ -173,10 +189,9 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
     if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
-        profiles.append(("exit_strain", "equivalent_strain",
-                         exit_strain_profile(problem),
-                         "equivalent strain", ("entry strain + ideal ln(A0/A1)",
-                                               summary["mean_entry_strain"] + summary["ideal_strain"])))
+        ideal = summary["mean_entry_strain"] + summary["ideal_strain"]
+        profiles.append(("exit_strain", "equivalent_strain", exit_strain_profile(problem),
+                         "equivalent strain", ("entry strain + ideal ln(A0/A1)", ideal)))
     temperature = problem.field("temperature")
     if temperature is not None:  # [thermal]: the product's temperature profile
         profiles.append(("exit_temperature", "temperature",
@@ -196,9 +211,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_summary(out / "summary.json", summary)
         key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
         unit = scene.units.label("stress")
-        log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s", key.replace("_", " "),
-                 summary[key], f" {unit}" if unit else "", summary["force_balance_residual"],
-                 summary["linear_solves"], summary["wall_time_s"])
+        log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s",
+                 key.replace("_", " "), summary[key], f" {unit}" if unit else "",
+                 summary["force_balance_residual"], summary["linear_solves"],
+                 summary["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]
             log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target "

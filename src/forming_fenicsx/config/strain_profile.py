@@ -1,8 +1,8 @@
-"""The equivalent strain across a section, y from the axis (or the strip's mid-plane) to the surface:
-the "hardness profile" a hardening run writes for its product (exit_strain.csv: the strain along
-the streamlines, the outermost two elements' mean at the surface, postprocess.exit_strain_profile),
-read back as the inflow strain of the next pass (``material.initial_strain_file``), so a pass
-schedule is a sequence of runs.
+"""The equivalent strain across a section, y from the axis (or the strip's mid-plane) to the
+surface: the "hardness profile" a hardening run writes for its product (exit_strain.csv: the
+strain along the streamlines, the outermost two elements' mean at the surface,
+exit_profiles.exit_strain_profile), read back as the inflow strain of the next pass
+(``material.initial_strain_file``), so a pass schedule is a sequence of runs.
 
 File: CSV with the header ``y,equivalent_strain`` (units in brackets after a name are allowed, as
 the run writes them: ``y [mm]``), y rising from 0 to the half-size of the section.

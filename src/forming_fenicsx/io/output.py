@@ -1,4 +1,5 @@
-"""Files of a run: summary.json, history.csv and fields.xdmf (with its .h5)."""
+"""Files of a run but its figures: summary.json, history.csv, die.csv, the exit profiles' CSV,
+fields.xdmf (with its .h5) and velocity.npz (the restart)."""
 from __future__ import annotations
 
 import csv
@@ -33,15 +34,17 @@ def write_summary(path: Path, summary: dict[str, Any]) -> None:
 
 
 def write_history(path: Path, history: list[IterationRecord]) -> None:
-    """history.csv: a row per linear solve (residual norm, step length and switch counts for Newton steps,
-    else nan, 1 and -1)."""
+    """history.csv: a row per linear solve (residual norm, step length and switch counts for Newton
+    steps, else nan, 1 and -1)."""
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow(["outer", "inner", "relative_increment", "elapsed_s", "solve_error_estimate",
-                         "residual_norm", "step_length", "law_switches", "contact_switches"])
+        writer.writerow(["outer", "inner", "relative_increment", "elapsed_s",
+                         "solve_error_estimate", "residual_norm", "step_length", "law_switches",
+                         "contact_switches"])
         for record in history:
-            writer.writerow([record.outer, record.inner, f"{record.increment:.6e}", f"{record.elapsed:.4f}",
-                             f"{record.solve_error:.3e}", f"{record.residual:.6e}", f"{record.step:.6g}",
+            writer.writerow([record.outer, record.inner, f"{record.increment:.6e}",
+                             f"{record.elapsed:.4f}", f"{record.solve_error:.3e}",
+                             f"{record.residual:.6e}", f"{record.step:.6g}",
                              record.law_switches, record.contact_switches])
 
 
@@ -82,8 +85,8 @@ def single_grid_xdmf(path: Path, name: str = "workpiece") -> None:
 
 
 def write_die_profile(path: Path, profile: dict, units: Units) -> None:
-    """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets it);
-    headers ``name [unit]`` when the scene names its units."""
+    """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets
+    it); headers ``name [unit]`` when the scene names its units."""
     names = list(profile)
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
@@ -94,7 +97,7 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
     """exit_<quantity>.csv: y across the product and the quantity ``name`` (the ``values`` of
-    postprocess.exit_profile or exit_strain_profile), the headers with their units (the strain
+    exit_profiles.exit_profile or exit_strain_profile), the headers with their units (the strain
     profile is the next pass's material.initial_strain_file: strain_profile.py reads it; a
     temperature in kelvin, and in units.temperature beside it when that is another unit)."""
     columns = [(units.column("y"), profile["y"]), *units.columns(name, profile["values"])]
@@ -116,7 +119,8 @@ def save_velocity(path: Path, u) -> None:
     values = u.x.array.reshape(-1, 2)[:owned]
     parts = space.mesh.comm.gather((points, values), root=0)
     if space.mesh.comm.rank == 0:
-        np.savez(path, points=np.concatenate([p for p, _ in parts]), velocity=np.concatenate([v for _, v in parts]))
+        np.savez(path, points=np.concatenate([p for p, _ in parts]),
+                 velocity=np.concatenate([v for _, v in parts]))
 
 
 def load_velocity(path: Path, u) -> None:
@@ -131,10 +135,12 @@ def load_velocity(path: Path, u) -> None:
     local = space.tabulate_dof_coordinates()[:, :2]
     total = comm.allreduce(space.dofmap.index_map.size_local)
     if len(points) != total:
-        raise ValueError(f"the restart velocity has {len(points)} nodes, this mesh {total}: not the same mesh")
+        raise ValueError(f"the restart velocity has {len(points)} nodes, this mesh {total}: "
+                         "not the same mesh")
     scale = max(np.ptp(points, axis=0).max(), 1e-300)
     keys = {tuple(k): i for i, k in enumerate(np.round(points / scale * 1e9).astype(np.int64))}
-    index = np.array([keys.get(tuple(k), -1) for k in np.round(local / scale * 1e9).astype(np.int64)])
+    index = np.array([keys.get(tuple(k), -1)
+                      for k in np.round(local / scale * 1e9).astype(np.int64)])
     if comm.allreduce(int((index < 0).sum())):
         raise ValueError("the restart velocity's nodes do not match this mesh: not the same mesh")
     u.x.array[:] = velocity[index].reshape(-1)

@@ -20,7 +20,8 @@ from petsc4py import PETSc
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.mesh.geometry import die_coordinate
 
-# a facet in contact at quadrature points of all but this fraction of its length is wholly in contact
+# a facet in contact at quadrature points of all but this fraction of its length is wholly in
+# contact
 FULL = 1e-9
 # the facet integrals gathered per Gamma3 facet
 COLUMNS = ("length", "contact", "area", "area_contact", "cone", "cone_contact", "cone_pressure",

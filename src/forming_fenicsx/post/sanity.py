@@ -1,11 +1,12 @@
-"""Physical sanity of a run, checked after every run: what a converged iteration can still get wrong.
+"""Physical sanity of a run, checked after every run: what a converged iteration can still get
+wrong.
 
-Each check reads the run's summary and gives a :class:`Finding`: a warning (the answer may be off; the
-run still counts as converged) or a failure (the answer cannot be right: the run counts as not
-converged and the command exits with 3). Every message names what was measured, the likely cause and
-the fix that fits the scene's settings; a ``cause`` (the law's rate window, drawability) is checked
-before the symptoms it explains. Thresholds (docs/sanity.md gives the values measured on correct and
-broken runs):
+Each check reads the run's summary and gives a :class:`Finding`: a warning (the answer may be off;
+the run still counts as converged) or a failure (the answer cannot be right: the run counts as not
+converged and the command exits with 3). Every message names what was measured, the likely cause
+and the fix that fits the scene's settings; a ``cause`` (the law's rate window, drawability) is
+checked before the symptoms it explains. Thresholds (docs/sanity.md gives the values measured on
+correct and broken runs):
 
 | check | warning above | failure above |
 |---|---|---|
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.config.sections import D_N_RELATIVE, D_RELATIVE
+from forming_fenicsx.config.sections import D_RELATIVE
 from forming_fenicsx.solvers.solvers import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)
@@ -58,7 +59,9 @@ class Finding:
     cause: bool = False
 
 
-def _graded(check: str, value: float, levels: tuple[float, float], message: str) -> Finding | None:
+def _graded(check: str, value: float, levels: tuple[float, float], message: str
+            ) -> Finding | None:
+    """A warning above levels[0], a failure above levels[1], else None."""
     if not value > levels[0]:
         return None
     return Finding(check, message, failure=value > levels[1])
@@ -89,28 +92,34 @@ def die_penetration(summary: dict[str, Any], scene: Scene, converged: bool) -> F
     return _graded("die_penetration", summary["die_penetration"], PENETRATION,
                    f"{100 * summary['die_penetration']:.3g} % of the throughput flows into the die "
                    f"(u_N > 0 on Gamma3; contact penalty d_N = {penalty.d_N:.3g}, "
-                   f"{penalty.d_N_relative:.3g} times U/sigma0): the workpiece passes through the die "
-                   f"instead of being formed by it. {fix}")
+                   f"{penalty.d_N_relative:.3g} times U/sigma0): the workpiece passes through the "
+                   f"die instead of being formed by it. {fix}")
 
 
-def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> Finding | None:
+def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
+                    ) -> Finding | None:
+    """The volume change the penalty leaves (Theorem 3.1), with the causes the scene shows."""
     if scene.discretisation.formulation != "penalty":
         return None
     value, penalty = summary["relative_divergence"], scene.penalty
     causes = []
     if any(f.check == "die_penetration" for f in found):
-        causes.append("the die lets the workpiece through (above), so it is squeezed instead of formed")
+        causes.append("the die lets the workpiece through (above), so it is squeezed instead of "
+                      "formed")
     if penalty.d_relative > 0.01:
-        causes.append(f"penalty.d = {penalty.d:.3g} is {penalty.d_relative:.3g} times rate0/sigma0, a soft "
-                      f"volumetric penalty: use a smaller penalty.d_relative or leave penalty.d out (default "
+        causes.append(f"penalty.d = {penalty.d:.3g} is {penalty.d_relative:.3g} times "
+                      "rate0/sigma0, a soft volumetric penalty: use a smaller "
+                      "penalty.d_relative or leave penalty.d out (default "
                       f"{D_RELATIVE:g}; Theorem 3.1: the error falls like O(d))")
-    if scene.discretisation.element == "Q1" and scene.discretisation.volumetric_integration == "complete":
-        causes.append("Q1 with complete integration of the penalty locks: use reduced integration or Q2")
+    discretisation = scene.discretisation
+    if discretisation.element == "Q1" and discretisation.volumetric_integration == "complete":
+        causes.append("Q1 with complete integration of the penalty locks: use reduced integration "
+                      "or Q2")
     if not causes:
         causes.append(f"penalty.d_relative = {penalty.d_relative:.3g}: use a smaller one")
     return _graded("compressibility", value, COMPRESSIBLE,
-                   f"the material compresses: ||div u||/||e(u)|| = {value:.2g}; the results are those of a "
-                   f"compressible material. Cause: {'; '.join(causes)}")
+                   f"the material compresses: ||div u||/||e(u)|| = {value:.2g}; the results are "
+                   f"those of a compressible material. Cause: {'; '.join(causes)}")
 
 
 def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
@@ -134,8 +143,8 @@ def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> 
                         "the flow law is viscous at this velocity: " + window.message, failure=True,
                         cause=True)]
     if yields and drawing and stress_ratio > DRAWING_LIMIT[0]:
-        return [Finding("drawability", f"not drawable: {stress}, and the {product} yields after the "
-                        f"die ({rigid}). No steady drawing exists at this reduction "
+        return [Finding("drawability", f"not drawable: {stress}, and the {product} yields "
+                        f"after the die ({rigid}). No steady drawing exists at this reduction "
                         f"({100 * summary.get('reduction', math.nan):.3g} %) and friction: reduce "
                         "the reduction per pass (the ideal limit is 63 %; real passes stay below "
                         "about 35 %) or the friction", failure=True, cause=True)]
@@ -159,22 +168,25 @@ def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> 
 
 
 def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """Flow across the free surfaces of the fixed domain (2.6)."""
     value = summary["free_surface_crossing"]
     return _graded("free_surface_crossing", value, FREE_SURFACE,
-                   f"{100 * value:.3g} % of the throughput crosses the free surfaces of the fixed domain (2.6): "
-                   "the real free surface lies elsewhere and the forces are those of another shape. Usual "
-                   "causes: the product yields after the die, the die leaves a gap the fixed domain ignores, "
-                   "or a coarse mesh (the crossing falls like the mesh size: refine discretisation.mesh_size)")
+                   f"{100 * value:.3g} % of the throughput crosses the free surfaces of the fixed "
+                   "domain (2.6): the real free surface lies elsewhere and the forces are those "
+                   "of another shape. Usual causes: the product yields after the die, the die "
+                   "leaves a gap the fixed domain ignores, or a coarse mesh (the crossing falls "
+                   "like the mesh size: refine discretisation.mesh_size)")
 
 
 def die_contact(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """A die that the workpiece does not touch at all."""
     fraction = summary["die_contact_fraction"]
     if not (math.isfinite(fraction) and fraction <= 0):
         return None
-    return Finding("die_contact", "the workpiece does not touch the die anywhere (no point of Gamma3 with "
-                   "u_N > 0): the die carries no load and the process force is not that of forming. Check "
-                   "process.velocity (its sign and where process.drive applies it) and the die geometry",
-                   failure=True)
+    return Finding("die_contact", "the workpiece does not touch the die anywhere (no point of "
+                   "Gamma3 with u_N > 0): the die carries no load and the process force is not "
+                   "that of forming. Check process.velocity (its sign and where process.drive "
+                   "applies it) and the die geometry", failure=True)
 
 
 def rate_window(summary: dict[str, Any], scene: Scene) -> list[Finding]:
@@ -183,32 +195,36 @@ def rate_window(summary: dict[str, Any], scene: Scene) -> list[Finding]:
     metal the law describes."""
     law, found = scene.material, []
     above = summary.get("dissipation_above_rate2", 0.0)
-    below = summary.get("dissipation_below_rate1", summary.get("dissipation_below_rate_floor", 0.0))
+    below = summary.get("dissipation_below_rate1",
+                        summary.get("dissipation_below_rate_floor", 0.0))
     velocity = f"process.velocity = {scene.process.velocity:g}"
     if above > ABOVE_RATE2:
-        found.append(Finding("rate_window", f"{100 * above:.3g} % of the plastic work is done at "
-                             f"strain rates above material.rate2 = {law.rate2:g}, where the law (4.5) "
-                             "turns linear and the flow stress grows in proportion to the rate: at "
-                             f"{velocity} the process runs in the law's viscous branch. Raise "
-                             "material.rate2 (it is in the scene's time unit) unless the material is "
-                             "that rate sensitive, or check process.velocity", cause=True))
+        found.append(Finding("rate_window", f"{100 * above:.3g} % of the plastic work is done "
+                             f"at strain rates above material.rate2 = {law.rate2:g}, where the law "
+                             "(4.5) turns linear and the flow stress grows in proportion to the "
+                             f"rate: at {velocity} the process runs in the law's viscous branch. "
+                             "Raise material.rate2 (it is in the scene's time unit) unless the "
+                             "material is that rate sensitive, or check process.velocity",
+                             cause=True))
     if below > BELOW_FLOOR:
         key = "material.rate1" if hasattr(law, "rate1") else "material.rate_floor"
-        found.append(Finding("rate_window", f"{100 * below:.3g} % of the plastic work is done at "
-                             f"strain rates below {key} = {law.rate_floor:g}, where the law is linear "
-                             f"(a viscous fluid, not a plastic metal): at {velocity} the process runs "
-                             f"in the wrong branch of the law. Lower {key} (it is in the scene's time "
-                             "unit) or check process.velocity", cause=True))
+        found.append(Finding("rate_window", f"{100 * below:.3g} % of the plastic work is done "
+                             f"at strain rates below {key} = {law.rate_floor:g}, where the law is "
+                             f"linear (a viscous fluid, not a plastic metal): at {velocity} the "
+                             f"process runs in the wrong branch of the law. Lower {key} (it is in "
+                             "the scene's time unit) or check process.velocity", cause=True))
     return found
 
 
 def solve_accuracy(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """Linear solves whose estimated error is not small beside the iteration's tolerance."""
     error = summary["solve_error_estimate"]
     if not error > ILL_CONDITIONED * scene.solver.tolerance:
         return None
-    return Finding("solve_accuracy", f"ill-conditioned linear systems: estimated relative error of a solve "
-                   f"{error:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; use larger penalty parameters "
-                   "(penalty.d_relative, penalty.d_N_relative, friction.d_T_relative)")
+    return Finding("solve_accuracy", "ill-conditioned linear systems: estimated relative error of "
+                   f"a solve {error:.1e}, above {ILL_CONDITIONED:.0%} of solver.tolerance; use "
+                   "larger penalty parameters (penalty.d_relative, penalty.d_N_relative, "
+                   "friction.d_T_relative)")
 
 
 def force_balance(summary: dict[str, Any], scene: Scene) -> Finding | None:
@@ -218,9 +234,9 @@ def force_balance(summary: dict[str, Any], scene: Scene) -> Finding | None:
     fix = ("Set solver.force_tolerance (e.g. 1e-3) so the iteration goes on until they balance"
            if scene.solver.force_tolerance == 0 else "Lower solver.force_tolerance")
     return _graded("force_balance", value, FORCE_BALANCE,
-                   f"the x forces do not balance: |driving + applied - die| is {100 * value:.3g} % of "
-                   "the driving force, so the reported forces and stresses are not those of one flow. "
-                   f"{fix}, or try solver.method = \"direct\"")
+                   f"the x forces do not balance: |driving + applied - die| is {100 * value:.3g} % "
+                   "of the driving force, so the reported forces and stresses are not those of one "
+                   f"flow. {fix}, or try solver.method = \"direct\"")
 
 
 def _temperature(kelvin: float) -> str:
@@ -249,8 +265,8 @@ def heat(summary: dict[str, Any], scene: Scene) -> list[Finding]:
             found.append(Finding("melting", finding.message + tail, finding.failure))
     below = thermal.coldest - coldest
     finding = _graded("temperature_undershoot", below, UNDERCOOLED,
-                      f"the workpiece's lowest temperature {_temperature(coldest)} lies {below:.3g} K "
-                      f"below the coldest temperature entering or around it "
+                      f"the workpiece's lowest temperature {_temperature(coldest)} lies "
+                      f"{below:.3g} K below the coldest temperature entering or around it "
                       f"({_temperature(thermal.coldest)}), which no steady heat flow can give: the "
                       "discrete temperature oscillates (a boundary layer thinner than the mesh); "
                       "refine discretisation.mesh_size")

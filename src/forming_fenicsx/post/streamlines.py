@@ -20,7 +20,7 @@ values on the boundary of the nearest cell; a step that ends beyond it is moved 
 rate integrated along the wall. Within about two elements of a sharp die entry that strain is not
 resolved (the velocity smears the entry's shear unevenly over the streamlines near the corner, at
 any mesh size: the transported field and the traced strain dip alike, docs/hardening.md), so the
-product's profile takes those elements' mean (postprocess.exit_strain_profile).
+product's profile takes those elements' mean (exit_profiles.exit_strain_profile).
 """
 from __future__ import annotations
 
@@ -67,10 +67,10 @@ def streamline_strain(problem: FlowProblem, points: np.ndarray,
                       entry_distance: Callable[[np.ndarray], np.ndarray] | None = None,
                       steps_per_cell: int = STEPS_PER_CELL) -> np.ndarray:
     """The equivalent strain at the points (N, 2) of a hardening run's flow: the entry strain
-    (the strain field's ``entry_strain``) where the streamline through each point enters, plus the strain rate
-    integrated along it (module docstring). ``entry_distance`` of points (N, 2) is positive
-    downstream of the entry and zero on it (by default x less the workpiece's smallest x); the step
-    that crosses it is cut there. Collective, the same array on every rank; nan where the
+    (the strain field's ``entry_strain``) where the streamline through each point enters, plus the
+    strain rate integrated along it (module docstring). ``entry_distance`` of points (N, 2) is
+    positive downstream of the entry and zero on it (by default x less the workpiece's smallest x);
+    the step that crosses it is cut there. Collective, the same array on every rank; nan where the
     streamline does not reach the entry (a closed streamline: it stops after ``4 steps_per_cell``
     times the workpiece's length and height in steps of a smallest cell)."""
     mesh, comm = problem.mesh, problem.comm

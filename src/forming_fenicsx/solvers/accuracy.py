@@ -1,17 +1,7 @@
 """Accuracy on demand: a scene solved on a sequence of finer meshes, each started from the previous
 solution interpolated onto it (transfer.py), until the estimated error of its main quantity is below
-a target (docs/accuracy.md measures how the estimate compares with the true error).
-
-The estimate is Richardson's from the last three meshes h1 > h2 > h3 with values f1, f2, f3: with
-f(h) = F + C h^p, the observed order p solves (f1 - f2)/(f2 - f3) = (h1^p - h2^p)/(h2^p - h3^p), the
-extrapolated value is F = f3 - (f2 - f3) h3^p/(h2^p - h3^p) and the error of the finest value is
-estimated as FACTOR |f3 - F|. A sequence outside its asymptotic range is guarded against: when the
-differences change sign (an oscillation) the estimate is FACTOR |f3 - f2| and nothing is
-extrapolated; when the observed order lies outside [MIN_ORDER, 2(k + 1)] (k the element degree) it
-is clipped to that range and the estimate is FACTOR times the larger of the clipped Richardson error
-and |f3 - f2|. ``kind`` says which was used. FACTOR = 1.25 is Roache's factor of safety of the grid
-convergence index for three meshes: Richardson's |f3 - F| alone lay between 0.60 and 1.06 times the
-true error on Example 1 and the exact drawing field (docs/accuracy.md), below it in five of six.
+a target. The estimate is Richardson's with its guards (core/richardson.py); docs/accuracy.md
+measures how it compares with the true error.
 """
 from __future__ import annotations
 
@@ -19,97 +9,19 @@ import copy
 import logging
 import math
 import time
-from dataclasses import dataclass
 from typing import Any, Callable
 
 import dolfinx.fem
 from mpi4py import MPI
 
-from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.core.richardson import Estimate, estimate, relative
+from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.solvers.solvers import SolveResult
 
 log = logging.getLogger(__name__)
-FACTOR = 1.25      # the estimate over Richardson's error (Roache's grid convergence index)
-MIN_ORDER = 0.5    # below this the sequence is taken as not yet asymptotic
 SAFETY = 0.8       # a predicted mesh size aims at this fraction of the target
 MIN_RATIO, MAX_RATIO = 1.5, 3.0  # the refinement a prediction may choose
-
-
-@dataclass
-class Estimate:
-    """The error estimate of the finest value of a sequence: the extrapolated limit (NaN when none),
-    the estimated absolute error of the finest value (FACTOR times the rule's), the observed order
-    (NaN when none) and which rule gave the estimate."""
-
-    extrapolated: float
-    error: float
-    order: float
-    kind: str
-
-
-def observed_order(sizes: list[float], values: list[float]) -> float:
-    """p with (f1 - f2)/(f2 - f3) = (h1^p - h2^p)/(h2^p - h3^p) for the last three meshes, by
-    bisection (the right side grows with p from ln(h1/h2)/ln(h2/h3) at p = 0); 0 when the ratio lies
-    below that (the differences do not shrink: no convergence seen), NaN when the differences change
-    sign."""
-    (h1, h2, h3), (f1, f2, f3) = sizes[-3:], values[-3:]
-    if (f1 - f2) * (f2 - f3) <= 0:
-        return math.nan
-    ratio = (f1 - f2) / (f2 - f3)
-
-    def model(p: float) -> float:
-        return (h1**p - h2**p) / (h2**p - h3**p)
-
-    if ratio <= math.log(h1 / h2) / math.log(h2 / h3):
-        return 0.0
-    low, high = 1e-9, 1.0
-    while model(high) < ratio:
-        low, high = high, 2 * high
-        if high > 64:
-            return high
-    for _ in range(100):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if model(middle) < ratio else (low, middle)
-    return 0.5 * (low + high)
-
-
-def richardson_error(sizes: list[float], values: list[float], order: float) -> tuple[float, float]:
-    """The extrapolated value and the finest value's error for an order p (last three meshes)."""
-    (h2, h3), (f2, f3) = sizes[-2:], values[-2:]
-    correction = (f2 - f3) * h3**order / (h2**order - h3**order)
-    return f3 - correction, abs(correction)
-
-
-def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
-    """The error estimate of the finest of at least three values on meshes of decreasing sizes
-    (module docstring): Richardson's when the observed order lies in [MIN_ORDER, 2(degree + 1)],
-    else the guarded, less optimistic one."""
-    if len(values) < 3:
-        raise ValueError("an observed order needs three meshes")
-    last = abs(values[-1] - values[-2])
-    if last == 0:
-        return Estimate(values[-1], 0.0, math.nan, "the last two values agree")
-    order = observed_order(sizes, values)
-    if math.isnan(order):
-        return Estimate(math.nan, FACTOR * last, math.nan,
-                        "oscillating: the last two values' difference, no extrapolation")
-    highest = 2.0 * (degree + 1)
-    if MIN_ORDER <= order <= highest:
-        limit, error = richardson_error(sizes, values, order)
-        return Estimate(limit, FACTOR * error, order, "richardson")
-    clipped = min(max(order, MIN_ORDER), highest)
-    limit, error = richardson_error(sizes, values, clipped)
-    return Estimate(limit, FACTOR * max(error, last), order,
-                    f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not "
-                    f"asymptotic): the larger of Richardson's with order {clipped:g} and the last "
-                    "two values' difference")
-
-
-def relative(found: Estimate, value: float) -> float:
-    """The estimated error relative to the extrapolated value (to the finest when none)."""
-    reference = found.extrapolated if math.isfinite(found.extrapolated) else value
-    return found.error / abs(reference) if reference != 0 else math.inf
 
 
 def next_mesh_size(size: float, found: Estimate | None, relative_error: float, target: float,

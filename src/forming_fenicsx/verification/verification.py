@@ -18,7 +18,7 @@ from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
 from forming_fenicsx.config.loader import scene_from_dict
-from forming_fenicsx.solvers.newton import NewtonSolver
+from forming_fenicsx.solvers.choice import solver_for
 from forming_fenicsx.solvers.solvers import SecantSolver
 
 LENGTH, HALF_HEIGHT, GRADIENT, A = 2.0, 1.0, 1.0, 1.0
@@ -191,11 +191,12 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
     sin^2 alpha) (cone) or F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1)
     (radial_stress_rise, or radial_hardening_stress_rise), and with a hardening law the mean exit
     strain beside the exact eps0 + ln(A0/A1)."""
-    from forming_fenicsx.post.postprocess import mean_strain_through, reaction_on
+    from forming_fenicsx.post.flux import mean_strain_through
+    from forming_fenicsx.post.forces import reaction_on
 
     problem = radial_problem(symmetry, n, element, cells, method, comm, material, tolerance)
     scene = problem.scene
-    solver = (NewtonSolver if method == "newton" else SecantSolver)(problem)
+    solver = solver_for(problem)
     result = solver.solve()
     solver.destroy()
     if not result.converged:
@@ -233,7 +234,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     rate0 and the end force over pi R^2 sigma(rate0). The penalty's solution differs by O(d)
     (sigma_H = sigma/3 needs div u = d sigma/3, Theorem 3.1): d is 1e-6 rate0/sigma0 here."""
     from forming_fenicsx.mesh.geometry import Constraint
-    from forming_fenicsx.post.postprocess import reaction
+    from forming_fenicsx.post.forces import reaction
 
     rate, n, length = 0.5, 0.2, 2.0
     mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([length, 1.0])], [6, 3],
@@ -259,7 +260,7 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
         "solver": {"method": method, "tolerance": 1e-8, "reference_strain_rate": 0.1}})
     problem = coupled_problem(scene, FormingMesh(mesh, tags, {role: ROLES[role] for role in facets},
                                                  constraints))
-    solver = (NewtonSolver if method == "newton" else SecantSolver)(problem)
+    solver = solver_for(problem)
     result = solver.solve()
     solver.destroy()
     if not result.converged:

@@ -13,7 +13,7 @@ from mpi4py import MPI
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.numbers import is_number
 from forming_fenicsx.io.output import json_safe
-from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.core.richardson import MIN_ORDER, richardson
 from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.core.units import Units
 
@@ -28,11 +28,6 @@ MESH_KEYS = ("discretisation.mesh_size", "discretisation.mesh_size_relative")  #
 
 
 ERROR_LEVELS = (0.10, 0.03, 0.01)
-
-
-# below this observed order the Richardson limit lies more than 2.4 times the last change beyond the
-# finest value: the three meshes are taken as not yet in the asymptotic range (no reference)
-LEAST_ORDER = 0.5
 
 
 def is_design_key(key: str) -> bool:
@@ -83,8 +78,8 @@ def mesh_size(settings: dict[str, str]) -> float:
 def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     """Set every row's ``reference``: for each quantity its value, kind (exact, Richardson from the
     three finest mesh sizes of the same other settings when their observed order is at least
-    LEAST_ORDER, or none) and relative error (in place; the exact values are the rows'
-    ``exact``)."""
+    core.richardson.MIN_ORDER, or none) and relative error (in place; the exact values are the
+    rows' ``exact``)."""
     groups: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault(settings_key(row["settings"], MESH_KEYS), []).append(row)
@@ -92,9 +87,10 @@ def references(rows: list[dict[str, Any]], quantities: list[str]) -> None:
     for quantity, group in itertools.product(quantities, groups.values()):
         ranked = sorted((r for r in group if r["converged"] and math.isfinite(value(r, quantity))),
                         key=lambda r: -mesh_size(r["settings"]))
-        limit, order = richardson([value(r, quantity) for r in ranked]) if len(ranked) >= 3 \
+        limit, order = richardson([mesh_size(r["settings"]) for r in ranked],
+                                  [value(r, quantity) for r in ranked]) if len(ranked) >= 3 \
             else (math.nan, math.nan)
-        limit = limit if order >= LEAST_ORDER else math.nan
+        limit = limit if order >= MIN_ORDER else math.nan
         for row in group:
             exact = row["exact"].get(quantity)
             if exact is not None:

@@ -12,7 +12,6 @@ from typing import Any
 from mpi4py import MPI
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.io.output import json_safe
-from forming_fenicsx.core.report import markdown_table, richardson
 from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.config.loader import (apply_overrides, parse_override, read_scene_data,
                                            scene_from_dict)

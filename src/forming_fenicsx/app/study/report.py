@@ -12,7 +12,7 @@ from typing import Any
 from mpi4py import MPI
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.io.output import json_safe
-from forming_fenicsx.core.report import markdown_table, richardson
+from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.core.units import Units
 from forming_fenicsx.app.study.analysis import cheapest, has_reference, is_design_key, references, relative_error, value

@@ -1,0 +1,99 @@
+"""The die: the contact pressure on Gamma3 (the penalty's sigma_N of (3.4), or the stress's), its
+nodal profile along the die coordinate s, and the contact zone's scalars (contact_zone.py)."""
+from __future__ import annotations
+
+import math
+
+import dolfinx.fem
+import numpy as np
+import ufl
+from ufl.core.expr import Expr
+
+from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.fem.projection import LumpedProjector
+from forming_fenicsx.mesh.geometry import die_coordinate
+from forming_fenicsx.physics import friction
+from forming_fenicsx.post.contact_zone import facet_integrals, zone_scalars
+
+
+def in_contact(problem: FlowProblem) -> Expr:
+    """1 where the workpiece presses on the die (sigma_N < 0), else 0."""
+    return ufl.conditional(ufl.gt(problem.contact_pressure(problem.u), 0.0), 1.0, 0.0)
+
+
+def die_pressure(problem: FlowProblem) -> Expr:
+    """Contact pressure -sigma_N on Gamma3: the contact's (lambda + u_N/d_N)^+ (contact.py), or
+    -n.sigma.n of the stress."""
+    if problem.scene.output.die_pressure == "stress":
+        n = problem.n
+        return -ufl.dot(n, ufl.dot(problem.coordinates.in_plane(problem.stress()), n))
+    return problem.contact_pressure(problem.u)
+
+
+def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
+    """Nodal values along Gamma3 on rank 0 (None elsewhere), ordered by the die coordinate s:
+    contact pressure, averaged normal stress (when friction uses it) and friction stress
+    |sigma_T|."""
+    space = function_space(problem.mesh, "P", 1)
+    ds = problem.ds_contact
+    sources = {"contact_pressure": die_pressure(problem)}
+    if problem.normal_stress_average is not None:
+        sources["averaged_normal_stress"] = problem.normal_stress_average.value
+    if problem.has_friction:
+        slip = friction.tangential(problem.u, problem.n)
+        sources["friction_stress"] = problem.friction_coefficient() * ufl.sqrt(ufl.dot(slip, slip))
+    owned = space.dofmap.index_map.size_local
+    dofs = dolfinx.fem.locate_dofs_topological(space, problem.mesh.topology.dim - 1,
+                                               problem.role_facets("gamma3_contact"))
+    dofs = dofs[dofs < owned]
+    points = space.tabulate_dof_coordinates()[dofs]
+    columns = {"x": points[:, 0], "y": points[:, 1]}
+    for name, expr in sources.items():
+        target = dolfinx.fem.Function(space)
+        columns[name] = LumpedProjector(expr, target, problem.full_degree,
+                                        ds).project().x.array[dofs]
+    gathered = problem.comm.gather(columns, root=0)
+    if problem.comm.rank != 0:
+        return None
+    profile = {key: np.concatenate([part[key] for part in gathered]) for key in columns}
+    profile["s"] = die_coordinate(problem.scene, profile["x"], profile["y"])
+    order = np.argsort(profile["s"])
+    return {key: profile[key][order] for key in ["s", *columns]}
+
+
+def _zone(problem: FlowProblem, pressure: Expr, cone: Expr | float) -> dict[str, float]:
+    """contact_zone.zone_scalars of ``pressure`` where the workpiece is in contact, ``cone``
+    marking the die's part from its entry to the land, on every rank (collective)."""
+    facets = facet_integrals(problem, pressure, in_contact(problem), cone)
+    zone = zone_scalars(facets) if facets is not None else None
+    return problem.comm.bcast(zone, root=0)
+
+
+def die_scalars(problem: FlowProblem) -> dict[str, float]:
+    """q_av over the contact zone's part in the die from its entry to the land (the paper's mean
+    die pressure; over all of Gamma3 for a user's mesh), the contact length (contact_zone.py:
+    the facets inside the zone count whole, however finely the die is described), and the x
+    where the workpiece leaves the die (last node of Gamma3 with positive contact pressure)."""
+    g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
+    start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
+    cone = 1.0 if g.mesh_file else ufl.conditional(
+        ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    zone = _zone(problem, die_pressure(problem), cone)
+    profile = die_profile(problem)
+    end = None
+    if profile is not None:
+        pressure = profile["contact_pressure"]
+        pressed = pressure > 1e-9 * max(pressure.max(), 1e-300)
+        end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
+    return {"mean_die_pressure": zone["mean_die_pressure"],
+            "contact_length": zone["contact_length"],
+            "contact_end_x": problem.comm.bcast(end, root=0),
+            "die_contact_fraction": zone["die_contact_fraction"]}
+
+
+def die_contact_fraction(problem: FlowProblem) -> float:
+    """The contact length over the length of Gamma3 (contact_zone.py; NaN without a die)."""
+    if not problem.has_contact:
+        return math.nan
+    return _zone(problem, problem.contact_pressure(problem.u), 1.0)["die_contact_fraction"]

@@ -1,0 +1,101 @@
+"""Forces on the workpiece: consistent reactions (the residual of (3.12) at the dofs of a
+prescribed velocity), the die's penalty (3.4) and friction tractions integrated over Gamma3, the
+applied force F_N on Gamma5 (2.7), the x force balance between them, and the model's forces made
+the whole product's."""
+from __future__ import annotations
+
+from typing import Any
+
+from forming_fenicsx.core.roles import ROLES
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.physics import friction
+from forming_fenicsx.post.integrals import integrate
+
+
+def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
+    """Force the constraint on ``role`` exerts on the workpiece along its component."""
+    component = next(c.component for c in problem.constraints if c.role == role)
+    return reaction_on(problem, role, component)
+
+
+def reaction_on(problem: FlowProblem, role: str, component: int) -> float:
+    """Force along x (0) or y (1) that the velocity prescribed on ``role`` exerts on the
+    workpiece: the residual summed over that component's dofs there (the whole body's when
+    axisymmetric)."""
+    residual = problem.residual.vector()
+    dofs = problem.boundary_dofs(role, component)
+    owned = problem.V.dofmap.index_map.size_local * problem.V.dofmap.index_map_bs
+    value = residual.getArray(readonly=True)[dofs[dofs < owned]].sum()
+    residual.destroy()
+    return problem.comm.allreduce(value)
+
+
+def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
+    """x-forces the workpiece exerts on the die: normal (contact penalty) and friction parts."""
+    if not problem.has_contact:
+        return 0.0, 0.0
+    n, ds = problem.n, problem.ds_contact
+    normal = integrate(problem, problem.contact_pressure(problem.u) * n[0] * ds)
+    if not problem.has_friction:
+        return normal, 0.0
+    traction = friction.friction_traction(problem.friction_coefficient(), problem.u, n)
+    return normal, integrate(problem, -traction[0] * ds)
+
+
+def die_separation_force(problem: FlowProblem) -> float:
+    """The force that pushes the die apart: the y-traction of the workpiece on the die (contact
+    pressure p n_y plus the friction stress's y part) integrated over Gamma3 with the coordinate
+    system's separation weight: per unit width on one die half in plane strain; for a round die,
+    the force across a diametral plane, 2 int y t_y ds."""
+    if not problem.has_contact:
+        return 0.0
+    n, c = problem.n, problem.coordinates
+    traction_y = problem.contact_pressure(problem.u) * n[1]
+    if problem.has_friction:
+        traction_y -= friction.friction_traction(problem.friction_coefficient(), problem.u, n)[1]
+    plain = problem.ds.measure(ROLES["gamma3_contact"])
+    return integrate(problem, traction_y * c.separation_weight * plain)
+
+
+def applied_force_x(problem: FlowProblem) -> float:
+    """x-force of F_N on Gamma5 (2.7) acting on the workpiece."""
+    if not problem.has_force:
+        return 0.0
+    return problem.scene.process.applied_force * integrate(
+        problem, problem.n[0] * problem.ds(ROLES["gamma5_force"]))
+
+
+def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
+    """(relative residual, Gamma1 force, die normal x-force, die friction x-force, applied x-force)
+    of the x force balance Gamma1 force + applied force = die force (verification.md), at the
+    current state."""
+    force = reaction(problem)
+    die_normal, die_friction = die_forces_x(problem)
+    external = applied_force_x(problem)
+    die = die_normal + die_friction
+    return (abs(force + external - die) / max(abs(force), abs(die), 1e-300), force, die_normal,
+            die_friction, external)
+
+
+# forces on the whole product (the model's times CoordinateSystem.whole and the strip's width)
+PRODUCT_FORCES = ("ram_force", "drawing_force", "die_force_x", "die_normal_force_x",
+                  "die_friction_force_x", "applied_force_x")
+# the energy balance's ratios; its other terms are powers, scaled as the forces
+BALANCE_RATIOS = ("residual", "global_residual")
+
+
+def whole_product(problem: FlowProblem, numbers: dict[str, Any]) -> dict[str, Any]:
+    """The model's forces and powers made the whole product's: times 2 for the plane-strain half
+    model (per unit width), and times geometry.width when the scene gives it (then in force
+    units). The die separation force acts on each die half, which the half model holds whole: it
+    takes the width only."""
+    width = problem.scene.geometry.width or 1.0
+    factor = problem.coordinates.whole * width
+    scaled = {key: value * factor if key in PRODUCT_FORCES else value
+              for key, value in numbers.items()}
+    if "die_separation_force" in scaled:
+        scaled["die_separation_force"] *= width
+    if "energy_balance" in scaled:
+        scaled["energy_balance"] = {key: value if key in BALANCE_RATIOS else value * factor
+                                    for key, value in scaled["energy_balance"].items()}
+    return scaled

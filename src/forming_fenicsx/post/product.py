@@ -1,0 +1,67 @@
+"""Scalars of the product: the pass's reduction and central-burst indicator, its mean strain (the
+redundant strain beside the ideal one) and, with a hardening law, its strains, redundant-work
+factor and flow stresses."""
+from __future__ import annotations
+
+import math
+
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.physics.closed_forms import central_burst_indicator
+from forming_fenicsx.post.flux import mean_strain_through, throughput
+from forming_fenicsx.post.integrals import integrate
+
+
+def pass_shape(problem: FlowProblem) -> dict[str, float]:
+    """The reduction r (of area for a round bar, of thickness for a strip) and the central-burst
+    indicator Delta of a profiled die at its semi_angle (closed_forms.central_burst_indicator);
+    none for a user's mesh."""
+    g = problem.scene.geometry
+    if g.mesh_file is not None:
+        return {}
+    ratio = g.exit_thickness / g.entry_thickness
+    reduction = 1 - (ratio**2 if g.axisymmetric else ratio)
+    return {"reduction": reduction,
+            "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle,
+                                                               g.symmetry)}
+
+
+def product_flow_stress(problem: FlowProblem) -> float:
+    """The drawn product's flow stress at the process strain rate: at its mean exit strain for a
+    hardening law, the scene's reference flow stress otherwise."""
+    scene = problem.scene
+    if problem.strain is None:
+        return scene.reference_flow_stress
+    return float(scene.material.flow_stress([scene.reference_strain_rate],
+                                            mean_strain_through(problem))[0])
+
+
+def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
+    """With a hardening law: the mean entry and exit strains, the ideal strain ln(A0/A1)
+    (2/sqrt3 ln(h0/h1) in plane strain), the redundant-work factor (exit strain gained over the
+    ideal), and the mean flow stress Ybar = P / (Q (eps_exit - eps_in)): the plastic work rate
+    P = int sigma rate over the throughput Q and the strain gained, as the ideal-work formulas
+    use it."""
+    if problem.strain is None:
+        return {}
+    g = problem.scene.geometry
+    exit_strain, entry_strain = mean_strain_through(problem), mean_strain_through(problem, False)
+    gained = exit_strain - entry_strain
+    ratio = g.entry_thickness / g.exit_thickness
+    ideal = 2 * math.log(ratio) if g.axisymmetric else 2 / math.sqrt(3) * math.log(ratio)
+    rate = problem.equivalent_strain_rate(problem.u)
+    work = integrate(problem, problem.flow_stress(problem.u) * rate * problem.dx)
+    return {"mean_entry_strain": entry_strain, "mean_exit_strain": exit_strain,
+            "ideal_strain": ideal, "redundant_work_factor": gained / ideal,
+            "mean_flow_stress": work / (throughput(problem) * gained) if gained > 0 else math.nan,
+            "product_flow_stress": product_flow_stress(problem)}
+
+
+def mean_exit_strain(problem: FlowProblem) -> float:
+    """The flux-weighted mean equivalent strain of the product: with u.grad(eps) = rate along the
+    streamlines and div u = 0, div(eps u) = rate, so int_exit eps u.n = int rate dx over the
+    workpiece (eps = 0 entering, no flow through the die and free surfaces) and the mean is
+    int rate dx / Q, Q the throughput. Compare the homogeneous strain ln(A0/A1) (round) or
+    (2/sqrt3) ln(h0/h1) (strip): the excess is the redundant strain."""
+    through = throughput(problem)
+    rate = problem.equivalent_strain_rate(problem.u)
+    return integrate(problem, rate * problem.dx) / through if through else math.nan

@@ -1,0 +1,63 @@
+"""The summary numbers of a run, gathered from the post-processing modules. The order of the calls
+matters: thermal_scalars settles the temperature (one way), and the numbers computed after it (the
+flow stress in the dissipation fractions) see the settled field."""
+from __future__ import annotations
+
+from forming_fenicsx.core.roles import ROLES
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergence,
+                                              dissipation_outside_window, divergence_l2,
+                                              exit_zone_rate_ratio, free_surface_crossing,
+                                              relative_divergence)
+from forming_fenicsx.post.die import die_contact_fraction, die_scalars
+from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
+from forming_fenicsx.post.heat import thermal_scalars
+from forming_fenicsx.post.integrals import integrate
+from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
+                                          product_flow_stress)
+from forming_fenicsx.post.ram_face import mean_hydrostatic_pressure
+
+
+def scalars(problem: FlowProblem) -> dict[str, float]:
+    """The summary numbers of a run: process force and pressure, die forces and the x force
+    balance, forces on the whole product (whole_product).
+
+    Extrusion: ram force and pressure (force over the Gamma1 height), p_av. Drawing: drawing force
+    and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end.
+    """
+    residual, force, die_normal, die_friction, external = force_balance(problem)
+    divergence = divergence_l2(problem)
+    if problem.scene.process.kind == "extrusion":
+        height = integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
+        process = {"ram_force": force, "ram_pressure": force / height,
+                   "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
+        if problem.scene.geometry.die != "square":
+            process.update({**die_scalars(problem), **pass_shape(problem)})
+    else:
+        stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
+        strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
+        process = {"drawing_force": force, "drawing_stress": stress,
+                   "product_yield_ratio": stress / strength,
+                   **die_scalars(problem), **pass_shape(problem)}
+    return whole_product(problem, {
+        **process,
+        **hardening_scalars(problem),
+        **thermal_scalars(problem, process),
+        "die_force_x": die_normal + die_friction,
+        "die_separation_force": die_separation_force(problem),
+        "die_normal_force_x": die_normal,
+        "die_friction_force_x": die_friction,
+        "applied_force_x": external,
+        "force_balance_residual": residual,
+        "divergence_l2": divergence,
+        "relative_divergence": relative_divergence(problem, divergence),
+        **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
+        "free_surface_crossing": free_surface_crossing(problem),
+        "die_penetration": die_penetration(problem),
+        **({} if "die_contact_fraction" in process else
+           {"die_contact_fraction": die_contact_fraction(problem)}),
+        "exit_zone_rate_ratio": exit_zone_rate_ratio(problem),
+        # a hardening law's is the transported strain's (hardening_scalars)
+        **({} if problem.strain is not None else {"mean_exit_strain": mean_exit_strain(problem)}),
+        **dissipation_outside_window(problem),
+    })
