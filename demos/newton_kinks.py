@@ -19,7 +19,8 @@ from mpi4py import MPI
 
 import dolfinx.fem
 
-from forming_fenicsx import contact, load_scene
+from forming_fenicsx import load_scene
+from forming_fenicsx.physics import contact
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.solvers.newton import NewtonSolver
