@@ -345,7 +345,7 @@ def test_newton_falls_back_to_the_direct_method_on_a_1_degree_die():
     """Issue 34: on a 1 degree die (demos/strip_mm.toml's strip, 2.0 -> 1.6 mm, mu 0.08) Newton
     diverged while thousands of Gauss points switched the flow law's branch each step; the direct
     method converges (271.86 MPa; Sachs 270.3). Now Newton hands over to it from the secant
-    start's iterate and says why (measured: 271.57 MPa in 33 solves)."""
+    start's iterate and says why (measured: 271.69 MPa in 31 solves)."""
     scene = load_scene(DEMO.parent / "strip_mm.toml", ["geometry.die_angle=1.0",
                                                      "output.figures=false"])
     summary = solve_scene(scene)[2]

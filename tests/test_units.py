@@ -175,10 +175,12 @@ def test_a_strips_forces_are_the_whole_strips_per_unit_width_or_of_its_width():
     assert per_width["units"]["quantities"]["drawing_force"] == "lbf/in"
     wide = solve_scene(scene_from_dict({**STRIP_IN, "geometry": {**STRIP_IN["geometry"],
                                                                  "width": 2.5}}))[2]
-    assert wide["drawing_stress"] == pytest.approx(per_width["drawing_stress"], rel=1e-12)
+    # two runs: on 2 ranks they agree to the solves' round-off (5e-11 measured on Debian 13)
+    assert wide["drawing_stress"] == pytest.approx(per_width["drawing_stress"], rel=1e-8)
     for key in ("drawing_force", "die_force_x", "die_normal_force_x", "die_friction_force_x",
                 "die_separation_force"):
-        assert wide[key] == pytest.approx(2.5 * per_width[key], rel=1e-12), key
+        assert wide[key] == pytest.approx(2.5 * per_width[key], rel=1e-8), key
+    assert wide["drawing_force"] == pytest.approx(wide["drawing_stress"] * 0.080 * 2.5, rel=1e-12)
         assert wide["units"]["quantities"][key] == "lbf"
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "drawing"},
