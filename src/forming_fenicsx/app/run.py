@@ -26,7 +26,8 @@ from forming_fenicsx.post.postprocess import (die_profile, exit_profile, exit_st
 from forming_fenicsx.post.sanity import check_run
 from forming_fenicsx.core.units import DIMENSIONS
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.solvers.solvers import SecantSolver, SolveResult
+from forming_fenicsx.solvers.records import SolveResult
+from forming_fenicsx.solvers.secant import SecantSolver
 from forming_fenicsx.mesh.transfer import transfer
 
 log = logging.getLogger(__name__)

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from forming_fenicsx.config.scene import D_N_RELATIVE, D_RELATIVE, Scene
-from forming_fenicsx.solvers.solvers import ILL_CONDITIONED
+from forming_fenicsx.solvers.secant import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)
 COMPRESSIBLE = (0.1, 0.5)

@@ -27,7 +27,7 @@ from mpi4py import MPI
 
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.solvers.solvers import SolveResult
+from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
 FACTOR = 1.25      # the estimate over Richardson's error (Roache's grid convergence index)
