@@ -13,7 +13,7 @@ from mpi4py import MPI
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
 from forming_fenicsx.fem.projection import cell_means
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 
 from conftest import make_scene
 

@@ -12,7 +12,7 @@ from forming_fenicsx.fem.forms import FlowProblem, SplitForm
 from forming_fenicsx.fem.measures import quadrature_degree
 from forming_fenicsx.fem.newton_forms import newton_forms
 from forming_fenicsx.mesh.geometry import build_mesh
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 
 from conftest import make_scene, solved
 

@@ -18,10 +18,11 @@ from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import build_mesh
-from forming_fenicsx.solvers.newton import BRACKET, NewtonSolver, next_trial, parabola_step, parabola_vertex
+from forming_fenicsx.solvers.line_search import BRACKET, next_trial, parabola_step, parabola_vertex
+from forming_fenicsx.solvers.newton import NewtonSolver
 from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.config.loader import load_scene
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 
 from conftest import make_scene
 

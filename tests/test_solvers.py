@@ -13,7 +13,8 @@ from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.solvers.newton import NewtonSolver
 from forming_fenicsx.post.summary import scalars
 from forming_fenicsx.app.run import solve_scene
-from forming_fenicsx.solvers.solvers import LinearSolver, SecantSolver, diverging, stalled
+from forming_fenicsx.solvers.linear import LinearSolver
+from forming_fenicsx.solvers.secant import SecantSolver, diverging, stalled
 
 from conftest import make_scene
 

@@ -17,7 +17,7 @@ from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.solvers.newton import NewtonSolver
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import load_scene
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 from forming_fenicsx.verification.verification import radial_flow
 
 from conftest import make_scene

@@ -109,10 +109,10 @@ def configure_logging(quiet: bool, rank: int) -> None:
     log.addHandler(handler)
     log.setLevel(logging.WARNING if quiet else logging.INFO)
     # every iterate's line, unless the command quiets them again (a study: one line per run)
-    logging.getLogger("forming_fenicsx.solvers.solvers").setLevel(logging.NOTSET)
+    logging.getLogger("forming_fenicsx.solvers").setLevel(logging.NOTSET)
 
 
-LOGGERS = ("forming_fenicsx", "forming_fenicsx.solvers.solvers")  # the ones configure_logging sets
+LOGGERS = ("forming_fenicsx", "forming_fenicsx.solvers")  # the ones configure_logging sets
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -151,7 +151,8 @@ def _main(argv: list[str] | None) -> int:
             from forming_fenicsx.app.study import load_study, parse_quantities, run_study
 
             configure_logging(args.quiet, comm.rank)
-            logging.getLogger("forming_fenicsx.solvers.solvers").setLevel(logging.WARNING)  # one progress line per run
+            # one progress line per run
+            logging.getLogger("forming_fenicsx.solvers").setLevel(logging.WARNING)
             study_file = _is_study(args.scene)
             data, vary, quantities = load_study(args.scene, args.set) if study_file else \
                 (read_scene_data(args.scene, args.set), [], [])

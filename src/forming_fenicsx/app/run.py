@@ -34,7 +34,7 @@ from forming_fenicsx.post.sanity import check_run
 from forming_fenicsx.post.summary import scalars
 from forming_fenicsx.solvers.accuracy import solve_to_accuracy
 from forming_fenicsx.solvers.choice import solver_for
-from forming_fenicsx.solvers.solvers import SolveResult
+from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
 

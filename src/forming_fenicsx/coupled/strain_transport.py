@@ -31,15 +31,15 @@ from __future__ import annotations
 from typing import Callable
 
 import dolfinx.fem
-import dolfinx.fem.petsc
 import numpy as np
 import ufl
-from mpi4py import MPI
+from petsc4py import PETSc
 
 from forming_fenicsx.config.strain_profile import profile_values
 from forming_fenicsx.core.compat import function_space
+from forming_fenicsx.coupled.cached_solve import CachedSolve
+from forming_fenicsx.fem.linear_problem import DIRECT, LinearProblem
 from forming_fenicsx.physics.coordinates import CoordinateSystem
-from forming_fenicsx.fem.linear_system import LinearSystem, unchanged
 
 PREFIX = "strain"
 # GMRES with block-Jacobi ILU(1) in reverse Cuthill-McKee order (MUMPS LU should it fail): on the
@@ -77,7 +77,8 @@ class StrainField:
         mesh = u.function_space.mesh
         self.space = function_space(mesh, "P" if scheme == "supg" else "DP", degree) \
             if eps is None else eps.function_space
-        self.eps = dolfinx.fem.Function(self.space, name="equivalent_strain") if eps is None else eps
+        self.eps = eps if eps is not None else dolfinx.fem.Function(self.space,
+                                                                    name="equivalent_strain")
         # the strain flowing in at points (N, 2) of the entry (post.streamlines): the inflow
         # strain when it is a number, else set by whoever knows the profile (coupled.coupling)
         self.entry_strain: Callable[[np.ndarray], np.ndarray] | None = None
@@ -87,7 +88,6 @@ class StrainField:
         self._candidate = dolfinx.fem.Function(self.space)
         self.velocity = dolfinx.fem.Function(u.function_space)  # the velocity eps belongs to
         self._coordinates = coordinates
-        self.solves = 0
         v = self.velocity
         eps, w = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
         metadata = {"quadrature_degree": quadrature_degree}
@@ -117,9 +117,11 @@ class StrainField:
             raise ValueError(f"scheme must be supg or upwind; got {scheme!r}")
         bilinear = ufl.dot(v, ufl.grad(eps)) * test * dx + inflow * eps * w * ds + jumps
         linear = rate * test * dx + inflow * inflow_strain * w * ds
-        self._system = LinearSystem(dolfinx.fem.form(bilinear), dolfinx.fem.form(linear), mesh.comm,
-                                    PREFIX, options={**(SOLVER if scheme == "supg" else {}),
-                                                     **(options or {})})
+        self._system = LinearProblem(
+            dolfinx.fem.form(bilinear), [dolfinx.fem.form(linear)], self._candidate, prefix=PREFIX,
+            options={**DIRECT, **(SOLVER if scheme == "supg" else {}), **(options or {})},
+            fallback=True)
+        self._cached = CachedSolve(self._system, self.velocity, self.eps, "strain")
         # the transport residual R(eps(u), u) at the last solve, for its velocity derivative
         self._residual = ufl.replace(bilinear, {eps: self._candidate}) - linear
         self._dx = dx
@@ -129,30 +131,16 @@ class StrainField:
         # freeze): the switch to the tangent measures the change against the strain gained
         self._start: dolfinx.fem.Function | None = None
         self._gained = None
-        self._solved_for: tuple[np.ndarray] | None = None
         self._relaxation, self._tangent_from = relaxation, tangent_from
         # eps = eps(u) at every freeze, and its derivative in Newton's step (strain_tangent.py)
         self.in_tangent = False
         self._relaxed_freezes = 0
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
-        """eps of the velocity u (into ``_candidate``; collective); a velocity that is zero
-        everywhere (before the first solve) carries no strain: eps stays as it is. The solve for
-        the last velocity is kept: the same u (on every rank: the decision is collective, a
-        velocity changed on one rank only is solved on all) returns it without solving, even if
-        a Constant in the inflow strain has changed since."""
-        comm = self.space.mesh.comm
-        if unchanged(comm, self._solved_for, u.x.array):
-            return self._candidate
-        if comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
-            self._candidate.x.array[:] = self.eps.x.array
-            return self._candidate
-        self.velocity.x.array[:] = u.x.array
-        self.velocity.x.scatter_forward()
-        self._system.solve(self._candidate, "strain")
-        self.solves += 1
-        self._solved_for = (u.x.array.copy(),)
-        return self._candidate
+        """eps of the velocity u (into ``_candidate``; collective), kept for the next call at the
+        same u (cached_solve.py); a velocity that is zero everywhere (before the first solve)
+        carries no strain: eps stays as it is."""
+        return self._cached.solve(u)
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
         """eps <- eps + relaxation (eps(u) - eps); with ``tangent_from`` > 0 (Newton), once the
@@ -186,7 +174,7 @@ class StrainField:
 
     def restore(self, saved: object) -> None:
         self.eps.x.array[:], self.in_tangent, self._relaxed_freezes = saved
-        self._solved_for = None
+        self._cached.forget()
 
     def change(self, u: dolfinx.fem.Function) -> float:
         """||eps(u) - eps|| / ||eps(u)|| in the weighted L2 norm (collective)."""
@@ -211,14 +199,14 @@ class StrainField:
         return float(np.sqrt(difference / norm)) if norm > 0 else 0.0
 
     def velocity_derivative(self, direction) -> ufl.Form:
-        """dR/du [direction] of the transport residual R(eps, u) = a(u; eps, w) - L(u; w) at the last
-        solve (eps = eps(u)): the bilinear form C of the strain's sensitivity d eps = -D^-1 C du,
-        D the transport matrix."""
+        """dR/du [direction] of the transport residual R(eps, u) = a(u; eps, w) - L(u; w) at the
+        last solve (eps = eps(u)): the bilinear form C of the strain's sensitivity
+        d eps = -D^-1 C du, D the transport matrix."""
         return ufl.derivative(self._residual, self.velocity, direction)
 
-    def transport_solve(self, b, x) -> None:
+    def transport_solve(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
         """x = D^-1 b with the transport matrix of the last solve."""
-        self._system.solve_vector(b, x, "strain")
+        self._system.solve_system(x, b)
 
     def destroy(self) -> None:
         self._system.destroy()

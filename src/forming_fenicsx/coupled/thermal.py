@@ -43,18 +43,18 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import dolfinx.fem
-import dolfinx.fem.petsc
 import dolfinx.mesh
 import numpy as np
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from forming_fenicsx.core.compat import function_space
-from forming_fenicsx.physics.coordinates import CoordinateSystem
 from forming_fenicsx.core.anderson import AndersonMixing
-from forming_fenicsx.fem.linear_system import LinearSystem, unchanged
+from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.roles import ROLES
+from forming_fenicsx.coupled.cached_solve import CachedSolve
+from forming_fenicsx.fem.linear_problem import DIRECT, LinearProblem
+from forming_fenicsx.physics.coordinates import CoordinateSystem
 
 PREFIX = "thermal"
 CONTAINER = max(ROLES.values()) + 1  # the facet tag of the container wall, split from gamma3
@@ -163,7 +163,6 @@ class TemperatureField:
         self.T.x.array[:] = self.reference_temperature
         self._candidate = dolfinx.fem.Function(self.space)
         self.velocity = dolfinx.fem.Function(u.function_space)  # the velocity T belongs to
-        self.solves = 0
         v = self.velocity
         T, w = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
         metadata = {"quadrature_degree": quadrature_degree or 2 * degree + 2}
@@ -200,28 +199,25 @@ class TemperatureField:
             PETSc.ScalarType(value), dolfinx.fem.locate_dofs_topological(
                 self.space, fdim, facet_tags.indices[facet_tags.values == tag]), self.space)
             for tag, value in (fixed or {}).items()]
-        self._system = LinearSystem(dolfinx.fem.form(a), dolfinx.fem.form(L), mesh.comm, PREFIX,
-                                    self.bcs, options)
+        self._system = LinearProblem(dolfinx.fem.form(a), [dolfinx.fem.form(L)], self._candidate,
+                                     self.bcs, prefix=PREFIX, options={**DIRECT, **(options or {})},
+                                     fallback=True)
+        self._cached = CachedSolve(self._system, self.velocity, self.T, "temperature", (self.T,))
         self._mixing = AndersonMixing(mesh.comm, self.space.dofmap.index_map.size_local,
                                       anderson_depth, relaxation)
         self._norm = dolfinx.fem.form((self._candidate - self.reference_temperature) ** 2 * self.dx)
         self._difference = dolfinx.fem.form((self._candidate - self.T) ** 2 * self.dx)
-        self._solved_for: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def solves(self) -> int:
+        """The heat equation's linear solves so far."""
+        return self._cached.solves
 
     def solve(self, u: dolfinx.fem.Function) -> dolfinx.fem.Function:
-        """T of the velocity u with the source at the frozen T (into ``_candidate``; collective); a
-        velocity that is zero everywhere (before the first flow solve) leaves T as it is."""
-        if unchanged(self.mesh.comm, self._solved_for, u.x.array, self.T.x.array):
-            return self._candidate
-        if self.mesh.comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=MPI.MAX) == 0:
-            self._candidate.x.array[:] = self.T.x.array
-            return self._candidate
-        self.velocity.x.array[:] = u.x.array
-        self.velocity.x.scatter_forward()
-        self._system.solve(self._candidate, "temperature")
-        self.solves += 1
-        self._solved_for = (u.x.array.copy(), self.T.x.array.copy())
-        return self._candidate
+        """T of the velocity u with the source at the frozen T (into ``_candidate``; collective),
+        kept for the next call at the same u and T (cached_solve.py); a velocity that is zero
+        everywhere (before the first flow solve) leaves T as it is."""
+        return self._cached.solve(u)
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
         """T moved towards T(u): ``relaxation`` of the way, Anderson-accelerated over the freezes
@@ -237,7 +233,7 @@ class TemperatureField:
         self.T.x.array[:] = saved
         self._mixing = AndersonMixing(self._mixing.comm, self._mixing.owned, self._mixing.depth,
                                       self._mixing.damping)
-        self._solved_for = None
+        self._cached.forget()
 
     def settle(self, u: dolfinx.fem.Function) -> None:
         """T <- T(u), the solution at u itself: a one-way computation (freeze moves T

@@ -148,8 +148,6 @@ class FlowProblem:
         self.a = dolfinx.fem.form(self.a_ufl)
         load = self._linear(v)
         self.L = dolfinx.fem.form(load) if load is not None else None
-        zero = dolfinx.fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
-        self.system_vector = self.L or dolfinx.fem.form(ufl.inner(zero, v) * self.dx)
         # the residual of the velocity equations at u (its values on constrained dofs are reactions)
         v = ufl.TestFunction(self.V)
         residual = ufl.action(self._bilinear(ufl.TrialFunction(self.V), v), self.u)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from dolfinx.io import XDMFFile
 
-from forming_fenicsx.solvers.solvers import IterationRecord
+from forming_fenicsx.solvers.records import IterationRecord
 from forming_fenicsx.core.units import Units
 
 

@@ -32,7 +32,7 @@ from typing import Any
 
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.config.sections import D_RELATIVE
-from forming_fenicsx.solvers.solvers import ILL_CONDITIONED
+from forming_fenicsx.solvers.secant import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)
 COMPRESSIBLE = (0.1, 0.5)

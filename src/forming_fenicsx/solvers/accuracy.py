@@ -17,7 +17,7 @@ from mpi4py import MPI
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.core.richardson import Estimate, estimate, relative
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.solvers.solvers import SolveResult
+from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
 SAFETY = 0.8       # a predicted mesh size aims at this fraction of the target

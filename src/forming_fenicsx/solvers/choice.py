@@ -5,7 +5,7 @@ from typing import Any, Callable
 
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.solvers.newton import NewtonSolver
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 
 
 def solver_for(problem: FlowProblem, petsc_options: dict[str, Any] | None = None,

@@ -4,127 +4,81 @@ The secant-modulus methods (3.13)/(3.33) converge linearly; Newton's method on t
 (newton_forms.py) converges fast once near the answer. Its tangent is only about alpha times
 as stiff as the secant along the flow direction, so the iteration starts from the uniform-modulus
 solution and ``solver.secant_start`` direct secant iterates (the dual stress then starts at
-``solver.dual_start`` times tau(u)), and every Newton step is damped by a
-backtracking (Armijo) line search on the energy Phi that the solution minimises (the residual is its
-derivative) and then moved towards the minimum of Phi along the direction, or lengthened while Phi
-keeps falling when a full step would not yet meet delta. It stops
-with the rule of (4.4) on the full Newton step, ||du|| / ||u|| < delta (on the step taken when that was
-longer) after a step taken in full, and the force balance if solver.force_tolerance is set. The
-history counts the semismooth switches of each step (flow-law branch at the Gauss points, contact set
-at the die nodes), which keep the convergence from being quadratic on fine meshes.
+``solver.dual_start`` times tau(u)), and every Newton step is damped by a backtracking (Armijo)
+line search on the energy Phi that the solution minimises (the residual is its derivative) and then
+moved towards the minimum of Phi along the direction, or lengthened while Phi keeps falling when a
+full step would not yet meet delta (line_search.py). It stops with the rule of (4.4) on the full
+Newton step, ||du|| / ||u|| < delta (on the step taken when that was longer) after a step taken in
+full, and the force balance if solver.force_tolerance is set. The history counts the semismooth
+switches of each step (flow-law branch at the Gauss points, contact set at the die nodes), which
+keep the convergence from being quadratic on fine meshes.
 """
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import time
 
-import numpy as np
+from collections.abc import Callable
+from typing import Any
+
 import dolfinx.fem
 import dolfinx.fem.petsc
+import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from forming_fenicsx.core.compat import petsc_vec, set_at_quadrature_points
 from forming_fenicsx.core.errors import LinearSolveError
-from forming_fenicsx.fem.newton_forms import newton_forms
-from forming_fenicsx.solvers.solvers import IterationRecord, LinearSolver, SecantSolver, SolveResult, Timings, log
 from forming_fenicsx.coupled.strain_tangent import StrainTangent
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.fem.linear_problem import Timings
+from forming_fenicsx.fem.newton_forms import newton_forms
+from forming_fenicsx.solvers import messages
+from forming_fenicsx.solvers.line_search import (ARMIJO, MAX_HALVINGS, REFINEMENTS, next_trial,
+                                                 parabola_step)
+from forming_fenicsx.solvers.linear import LinearSolver
+from forming_fenicsx.solvers.records import IterationRecord, SolveResult
+from forming_fenicsx.solvers.secant import SecantSolver
 
-ARMIJO = 1e-4       # sufficient decrease of the energy, as a fraction of the first-order decrease
-MAX_HALVINGS = 12   # smallest step 2**-12
-REFINEMENTS = 6     # energy evaluations that move a cut step towards the minimum of Phi along the direction
-BRACKET = 0.1       # ... until the bracket around it is this small relative to the step
-GOLDEN = 0.381966   # (3 - sqrt(5))/2: golden-section fraction
+log = logging.getLogger(__package__)  # the solvers' one logger (app/cli.py sets its level)
+
 ROUNDING = 1e-12    # a relative Newton step below this is rounding
 # with the strain in the tangent a run stops only once the x forces balance to this (unless
 # solver.force_tolerance is set): switched to the tangent at 3e-2 of the strain gained, Dieter's
 # scene met delta with the forces 124 % out of balance (docs/hardening.md)
 COUPLED_BALANCE = 1e-3
-
-
-def parabola_vertex(a: float, fa: float, b: float, fb: float, c: float, fc: float) -> float | None:
-    """The minimiser of the parabola through (a, fa), (b, fb), (c, fc), a < b < c; None when it is not
-    convex."""
-    left, right = (b - a) * (fb - fc), (b - c) * (fb - fa)
-    if not right - left > 0:  # (b - a)(c - b)(c - a) times the leading coefficient
-        return None
-    return b - 0.5 * ((b - a) * left - (b - c) * right) / (left - right)
-
-
-def parabola_step(energy0: float, energy1: float, energy2: float) -> float | None:
-    """The minimiser, strictly between 1 and 2, of the parabola through Phi(0), Phi(1) and Phi(2) along a
-    Newton direction; None when the parabola is not convex or its minimiser lies outside (1, 2)."""
-    fitted = parabola_vertex(0.0, energy0, 1.0, energy1, 2.0, energy2)
-    return fitted if fitted is not None and 1.0 < fitted < 2.0 else None
-
-
-def next_trial(energies: dict[float, float]) -> float | None:
-    """The next step length at which to evaluate Phi when minimising it along a Newton direction (Phi is
-    convex there), from the lengths tried so far and their energies: the vertex of the parabola through
-    the lowest point and its neighbours, or a golden-section point of the wider side when the vertex lies
-    near the ends or the lowest point (Brent's safeguard). None when the lowest point has no neighbour on
-    one side (no bracket) or the bracket is within BRACKET of its size."""
-    lengths = sorted(energies)
-    lowest = min(range(len(lengths)), key=lambda k: energies[lengths[k]])
-    if lowest in (0, len(lengths) - 1):
-        return None
-    a, b, c = lengths[lowest - 1:lowest + 2]
-    if c - a < BRACKET * b:
-        return None
-    vertex = parabola_vertex(a, energies[a], b, energies[b], c, energies[c])
-    if vertex is not None and a + BRACKET * (b - a) < vertex < c - BRACKET * (c - b) \
-            and abs(vertex - b) > 0.5 * BRACKET * (c - a):
-        return vertex
-    return b + GOLDEN * (c - b) if c - b > b - a else b - GOLDEN * (b - a)
-
-
 # Newton's stops after which the direct method goes on (not a stop request, nor ill-conditioned
 # systems, which the direct method's would share)
 FALL_BACK_ON = ("non_finite", "diverging", "stalled", "max_iterations")
-STOPPED = {"non_finite": "failed a solve or gave a non-finite iterate", "diverging": "diverged",
-           "stalled": "stalled", "max_iterations": "did not converge in solver.max_iterations"}
-
-
-def newton_trigger(records: list[IterationRecord]) -> str:
-    """What the Newton steps measured as they failed, for the message: the increment's rise from
-    its least value, and the most Gauss points that switched the flow law's branch and die nodes
-    that switched the contact set in one step since then (the non-smooth parts of the operator)."""
-    steps = [r for r in records if math.isfinite(r.increment)]
-    if len(steps) < 2:
-        return ""
-    least = min(range(len(steps)), key=lambda k: steps[k].increment)
-    after = steps[least:]
-    law = max(r.law_switches for r in after)
-    contact = max(r.contact_switches for r in after)
-    text = (f": its increment rose from {steps[least].increment:.2e} (step {steps[least].inner}) "
-            f"to {steps[-1].increment:.2e}")
-    if law > 0 or contact > 0:
-        text += (f" while up to {law} Gauss points switched the flow law's branch and {contact} "
-                 "die nodes the contact set in a step")
-    return text
 
 
 class NewtonSolver(SecantSolver):
     """Newton's method (solver.method = "newton") after a few direct secant iterates.
 
-    Its operator (symmetrised primal-dual, FlowProblem.newton_forms) is assembled into the secant start's
-    matrix and shares its factorisation: Cholesky with the penalty, LU for the mixed saddle point."""
+    Its operator (symmetrised primal-dual, FlowProblem.newton_forms) is assembled into the secant
+    start's matrix and shares its factorisation: Cholesky with the penalty, LU for the mixed saddle
+    point."""
 
-    def __init__(self, problem, petsc_options=None, balance=None, stop=None):
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any] | None = None,
+                 balance: Callable[[], float] | None = None,
+                 stop: Callable[[], str | None] | None = None):
         super().__init__(problem, petsc_options, balance, stop)
         self.forms = newton_forms(problem)
-        self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator, linear=self.forms.residual.parts[0],
-                                   matrix_of=self.linear)  # the secant start's matrix: one symbolic analysis
+        # the secant start's matrix: one symbolic analysis
+        self.newton = LinearSolver(problem, {}, bilinear=self.forms.operator,
+                                   linear=self.forms.residual.parts, matrix_of=self.linear)
         self._velocity = problem.u.copy()  # the velocity before the current step
         self._change = petsc_vec(problem.u).duplicate()
         self._contact_set = None if self.forms.contact_set is None else \
             dolfinx.fem.petsc.create_vector(self.forms.contact_set)
         self._newton_start: dolfinx.fem.Function | None = None  # u when the Newton steps began
         self._newton_first = 0  # the history's index of the first Newton step
-        self._coupled_start: list[object] = []  # the coupled fields' values then (problem.snapshot)
-        self._branches: np.ndarray | None = None  # G' = 0 at the owned Gauss points, at the last operator
-        self._active: np.ndarray | None = None    # the die nodes in contact, at the last operator
+        self._coupled_start: list[object] = []  # the coupled fields' values then (snapshot)
+        # G' = 0 at the owned Gauss points, and the die nodes in contact, at the last operator
+        self._branches: np.ndarray | None = None
+        self._active: np.ndarray | None = None
         # a coupled field's derivative in the step once the coupling has settled (the
         # transported strain's, strain_tangent.py)
         carried = [field for field in problem.frozen if field.tangent]
@@ -148,32 +102,23 @@ class NewtonSolver(SecantSolver):
         return value
 
     def assemble_residual(self) -> PETSc.Vec:
-        """F(u) into the Newton right-hand side, the Dirichlet rows holding u - g (zero once u meets them)."""
-        start = time.perf_counter()
-        b, u = self.newton.b, petsc_vec(self.problem.solution)
-        with b.localForm() as local:
-            local.set(0.0)
-        self.forms.residual.add_to(b)
-        dolfinx.fem.petsc.apply_lifting(b, [self.forms.operator], [self.problem.bcs], [u], -1.0)  # positional:
-        # the keyword is scale in dolfinx 0.5 and alpha in 0.9
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        dolfinx.fem.petsc.set_bc(b, self.problem.bcs, u, -1.0)
-        self.newton.timings.assembly += time.perf_counter() - start
-        return b
+        """F(u) into the Newton right-hand side, the Dirichlet rows holding u - g (zero once u meets
+        them)."""
+        return self.newton.assemble_vector(petsc_vec(self.problem.solution), -1.0)
 
     def assemble_operator(self) -> None:
-        """The Newton operator at the current u and dual stress: G and G' of (4.5) at the Gauss points,
-        then the matrix."""
+        """The Newton operator at the current u and dual stress: G and G' of (4.5) at the Gauss
+        points, then the matrix."""
         start = time.perf_counter()
         set_at_quadrature_points(self.forms.tangent, self.forms.tangent_update)
         self.newton.timings.assembly += time.perf_counter() - start
         self.newton.assemble_matrix()
 
     def count_switches(self) -> tuple[int, int]:
-        """Gauss points whose branch of the flow-stress law (G' = 0 or not, from the operator's coefficients)
-        and die nodes whose contact state changed since the last call, summed over the ranks (-1 on the
-        first call of a solve, and for contact in a scene without it): the semismooth part of the Newton
-        operator."""
+        """Gauss points whose branch of the flow-stress law (G' = 0 or not, from the operator's
+        coefficients) and die nodes whose contact state changed since the last call, summed over the
+        ranks (-1 on the first call of a solve, and for contact in a scene without it): the
+        semismooth part of the Newton operator."""
         start = time.perf_counter()
         tangent = self.forms.tangent
         owned = tangent.function_space.dofmap.index_map.size_local
@@ -183,20 +128,23 @@ class NewtonSolver(SecantSolver):
             with self._contact_set.localForm() as local:
                 local.set(0.0)
             dolfinx.fem.petsc.assemble_vector(self._contact_set, self.forms.contact_set)
-            self._contact_set.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            self._contact_set.ghostUpdate(addv=PETSc.InsertMode.ADD,
+                                          mode=PETSc.ScatterMode.REVERSE)
             active = self._contact_set.array > 0.0
         changed = [-1 if self._branches is None else np.count_nonzero(branches != self._branches),
-                   -1 if self._active is None or active is None else np.count_nonzero(active != self._active)]
+                   -1 if self._active is None or active is None
+                   else np.count_nonzero(active != self._active)]
         self._branches, self._active = branches, active
-        counts = self.problem.comm.allreduce(np.array(changed), op=MPI.SUM)  # -1 on every rank, or >= 0
+        # -1 on every rank, or >= 0 on every rank
+        counts = self.problem.comm.allreduce(np.array(changed), op=MPI.SUM)
         self.newton.timings.assembly += time.perf_counter() - start
         law, contact = (int(count) if count >= 0 else -1 for count in counts)
         return law, contact
 
     def _newton_step(self, result: SolveResult, inner: int, start: float) -> float:
-        """Solve J du = F at u, then u <- u - s du with s from the line search (_line_search). Returns the
-        relative change ||du||/||u|| of the full step, or of the step taken when longer (NaN after a failed
-        solve)."""
+        """Solve J du = F at u, then u <- u - s du with s from the line search (_line_search).
+        Returns the relative change ||du||/||u|| of the full step, or of the step taken when longer
+        (NaN after a failed solve)."""
         forms = self.forms
         problem, u = self.problem, petsc_vec(self.problem.solution)
         du = petsc_vec(forms.step)  # the dual update reads it and the previous iterate
@@ -213,11 +161,11 @@ class NewtonSolver(SecantSolver):
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
-            result.reason = (f"linear solve failed at Newton step {inner}: {error}; the results are the previous "
-                             "iterate. Try a secant method or larger penalty parameters")
+            result.reason = messages.newton_solve_failed(inner, error)
             return math.nan
         result.linear_solves += 1
-        self._estimate = lambda: self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)  # relative to u
+        # relative to u
+        self._estimate = lambda: self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
         solve_error = self.sampled_error(result)
         coupled = ""
         if self._coupled_in_tangent():
@@ -233,23 +181,25 @@ class NewtonSolver(SecantSolver):
         self.keep_previous()
         petsc_vec(problem.u).copy(petsc_vec(self._velocity))
         step = self._line_search(energy0, slope)
-        increment = self._relative_change() / min(step, 1.0)  # (4.4): the full step, or the longer one taken
+        # (4.4): the full step, or the longer one taken
+        increment = self._relative_change() / min(step, 1.0)
         if not math.isfinite(increment):
             self._move(0.0)
         else:
-            set_at_quadrature_points(forms.dual, forms.dual_update)  # a full dual step, then the cap
-        record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error, residual, step,
-                                 law_switches, contact_switches)
+            # a full dual step, then the cap
+            set_at_quadrature_points(forms.dual, forms.dual_update)
+        record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error,
+                                 residual, step, law_switches, contact_switches)
         result.history.append(record)
         if problem.comm.rank == 0:
-            log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, contact %d  "
-                     "(%.1f s)%s", inner, increment, residual, step, law_switches, contact_switches, record.elapsed,
-                     coupled)
+            log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, "
+                     "contact %d  (%.1f s)%s", inner, increment, residual, step, law_switches,
+                     contact_switches, record.elapsed, coupled)
         return increment
 
     def keep_previous(self) -> None:
-        """The current iterate becomes the previous one (forms.previous, ghosts too): the line search moves
-        from it, the dual update and the operator's joined contact set read it."""
+        """The current iterate becomes the previous one (forms.previous, ghosts too): the line
+        search moves from it, the dual update and the operator's joined contact set read it."""
         petsc_vec(self.problem.solution).copy(petsc_vec(self.forms.previous))
         self.forms.previous.x.scatter_forward()
 
@@ -264,10 +214,10 @@ class NewtonSolver(SecantSolver):
     def _line_search(self, energy0: float, slope: float) -> float:
         """Move u to previous - s du and return s. A full step that lowers Phi by at least
         ARMIJO * F.du is taken, or, when it does not yet meet delta nor carry the strain's
-        derivative (_coupled_in_tangent), lengthened to the best of s = 1, s = 2
-        and the minimiser of the parabola through Phi at s = 0, 1, 2 (parabola_step): near the answer the
-        minimum of Phi along -du often lies beyond the full step, since while the dual stress differs
-        from tau(u) the operator is stiffer than the consistent tangent along the flow direction
+        derivative (_coupled_in_tangent), lengthened to the best of s = 1, s = 2 and the minimiser
+        of the parabola through Phi at s = 0, 1, 2 (parabola_step): near the answer the minimum of
+        Phi along -du often lies beyond the full step, since while the dual stress differs from
+        tau(u) the operator is stiffer than the consistent tangent along the flow direction
         (docs/solvers.md). Otherwise the step is halved until it lowers Phi by ARMIJO * s * F.du and
         then moved towards the minimum of Phi along -du (_refine)."""
         step, energy = 1.0, self._energy_at(1.0)
@@ -308,12 +258,13 @@ class NewtonSolver(SecantSolver):
         return self.coupled_tangent is not None and self.coupled_tangent.field.in_tangent
 
     def _refine(self, energies: dict[float, float], current: float) -> float:
-        """Evaluate Phi at up to REFINEMENTS more step lengths chosen by next_trial within the bracket of
-        the lengths tried (below the shortest step the halving rejected), adding them to ``energies``;
-        returns the length u is left at (``current`` when none was tried). Where a step is cut, Phi along
-        the direction falls nearly linearly up to a steep rise (the flow stress of (4.5) is nearly
-        constant above rate1, so Phi grows like |rate| where the step reverses the flow), and the halving
-        alone lands anywhere within a factor 2 of that minimum."""
+        """Evaluate Phi at up to REFINEMENTS more step lengths chosen by next_trial within the
+        bracket of the lengths tried (below the shortest step the halving rejected), adding them to
+        ``energies``; returns the length u is left at (``current`` when none was tried). Where a
+        step is cut, Phi along the direction falls nearly linearly up to a steep rise (the flow
+        stress of (4.5) is nearly constant above rate1, so Phi grows like |rate| where the step
+        reverses the flow), and the halving alone lands anywhere within a factor 2 of that
+        minimum."""
         for _ in range(REFINEMENTS):
             trial = next_trial(energies)
             if trial is None:
@@ -323,8 +274,8 @@ class NewtonSolver(SecantSolver):
         return current
 
     def _lowest(self, energies: dict[float, float], current: float) -> float:
-        """Move u from step length ``current`` to the nonzero length of lowest Phi among ``energies`` (the
-        lengths the line search evaluated) and return it."""
+        """Move u from step length ``current`` to the nonzero length of lowest Phi among
+        ``energies`` (the lengths the line search evaluated) and return it."""
         best = min((length for length in energies if length > 0.0), key=energies.get)
         if best != current:
             self._move(best)
@@ -332,7 +283,8 @@ class NewtonSolver(SecantSolver):
 
     def _move(self, step: float) -> None:
         """u = previous - step du, and the problem's state with it."""
-        u, du, previous = (petsc_vec(f) for f in (self.problem.solution, self.forms.step, self.forms.previous))
+        u, du, previous = (petsc_vec(f) for f in (self.problem.solution, self.forms.step,
+                                                  self.forms.previous))
         previous.copy(u)
         u.axpy(-step, du)
         self.problem.after_solve()
@@ -346,14 +298,16 @@ class NewtonSolver(SecantSolver):
         return self.linear.timings + self.newton.timings
 
     def _newton_iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
-        """Secant start, then Newton steps until the step is below delta (and the force balance holds)."""
+        """Secant start, then Newton steps until the step is below delta (and the force balance
+        holds)."""
         problem, settings = self.problem, self.settings
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
         result.outer_iterations = 1
         if not self._start(initial, result, start):
             return result
-        friction_note = f"; friction may make the solution non-unique{self._contact_note()}" \
+        friction_note = messages.newton_friction_note(problem.scene, settings.tolerance,
+                                                      settings.method) \
             if problem.has_friction else ""
         increments: list[float] = []
         for inner in range(1, settings.secant_start + 1):
@@ -363,7 +317,8 @@ class NewtonSolver(SecantSolver):
                 return result
         self._newton_start, self._newton_first = problem.u.copy(), len(result.history)
         self._coupled_start = problem.snapshot()
-        set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)  # tau(u), scaled by solver.dual_start
+        # tau(u), scaled by solver.dual_start
+        set_at_quadrature_points(self.forms.dual, self.forms.dual_reset)
         self.forms.dual.x.array[:] *= settings.dual_start
         self.keep_previous()  # the first operator's previous iterate: its contact set is u's
         self._branches = self._active = None  # count_switches starts afresh
@@ -373,23 +328,20 @@ class NewtonSolver(SecantSolver):
             increments.append(increment)
             if self._must_stop(result, increments, 0, inner, friction_note):
                 return result
-            # a step the line search cut does not end the run: its short full step says little about the
-            # distance to the answer when the energy along it is far from the Newton model
-            # (a full step below ROUNDING of u changes Phi by less than its rounding: the line search
-            # cannot judge it, and the step is as good as taken)
+            # a step the line search cut does not end the run: its short full step says little
+            # about the distance to the answer when the energy along it is far from the Newton
+            # model (a full step below ROUNDING of u changes Phi by less than its rounding: the
+            # line search cannot judge it, and the step is as good as taken)
             full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
             if (increment < settings.tolerance and settled
-                    and problem.coupled_settled(problem.u, settings.coupling_tolerance) and self._balanced(result)):
+                    and problem.coupled_settled(problem.u, settings.coupling_tolerance)
+                    and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
-        hint = ("; with a nearly rate-independent hardening law in plane strain, Newton's per-step "
-                "strain update may not settle: try solver.method = \"direct\", a rate factor, or "
-                "a hardening curve of finite initial slope (voce; swift with a prestrain)"
-                if problem.scene.material.hardens else "")
-        result.reason = (f"no convergence in {settings.max_iterations} Newton steps (last increment "
-                         f"{increment:.3e}, delta {settings.tolerance:g}{self._balance_note(result)})"
-                         f"{hint}")
+        result.reason = messages.no_convergence(
+            settings.max_iterations, increment, settings.tolerance, self._balance_note(result),
+            "Newton steps") + messages.hardening_hint(problem.scene)
         result.cause = "max_iterations"
         return result
 
@@ -400,10 +352,10 @@ class NewtonSolver(SecantSolver):
         if result.converged or result.cause not in FALL_BACK_ON or self._newton_start is None:
             return result
         steps = result.history[self._newton_first:]
-        failed = (f"Newton's method {STOPPED[result.cause]} at step {steps[-1].inner if steps else 0}"
-                  f"{newton_trigger(steps)}")
+        failed = messages.newton_failed(result.cause, steps)
         if self.problem.comm.rank == 0:
-            log.warning("%s: the direct method (3.13) goes on from the secant start's iterate", failed)
+            log.warning("%s: the direct method (3.13) goes on from the secant start's iterate",
+                        failed)
         self.settings = dataclasses.replace(self.settings, method="direct")
         self.problem.restore(self._coupled_start)
         direct = SecantSolver._iterate(self, self._newton_start)
@@ -411,6 +363,5 @@ class NewtonSolver(SecantSolver):
         direct.linear_solves += result.linear_solves
         direct.force_balance_checks = result.force_balance_checks + direct.force_balance_checks
         direct.fallback = failed
-        direct.reason = (f"{direct.reason}, by the direct method (3.13) after {failed} (set "
-                         "solver.method = \"direct\" to start with it)")
+        direct.reason = messages.after_fallback(direct.reason, failed)
         return direct

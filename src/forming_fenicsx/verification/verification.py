@@ -19,7 +19,7 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
 from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.solvers.choice import solver_for
-from forming_fenicsx.solvers.solvers import SecantSolver
+from forming_fenicsx.solvers.secant import SecantSolver
 
 LENGTH, HALF_HEIGHT, GRADIENT, A = 2.0, 1.0, 1.0, 1.0
 

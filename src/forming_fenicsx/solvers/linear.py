@@ -1,0 +1,83 @@
+"""The flow's linear systems: K(u_n, u_{0,m}) u_{n+1} = F of (4.4) and Newton's step, solved by a
+PETSc KSP under the options prefix ``flow_`` (MUMPS Cholesky for the penalty formulation, LU for the
+mixed one, by default; secant.py chooses), with an estimate of each solve's error."""
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import dolfinx.fem
+from petsc4py import PETSc
+
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.fem.linear_problem import LinearProblem
+
+
+class LinearSolver(LinearProblem):
+    """The matrix, right-hand side and KSP of one bilinear form of the flow, created once and reused
+    by every iterate: the secant system b(u_n; ., .) of (3.5) by default, or another form such as
+    Newton's operator with the right-hand side ``linear`` (the parts of its residual).
+
+    ``matrix_of``: another LinearSolver whose matrix and KSP this one assembles into and
+    factorises, for a form on the same space: MUMPS' symbolic analysis is then done once for both,
+    and one set of factors is held (Newton's operator after the secant start's matrix); its
+    ``petsc_options`` and ``positive_definite`` are then those of that KSP and matrix, and the
+    arguments are not read.
+    ``name``: the prefix of its PETSc options, which stay set until destroy."""
+
+    def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any],
+                 bilinear: dolfinx.fem.Form | None = None,
+                 linear: Sequence[dolfinx.fem.Form] | None = None,
+                 matrix_of: LinearSolver | None = None, positive_definite: bool = False,
+                 name: str = "flow"):
+        self.problem = problem
+        self.positive_definite = (matrix_of.positive_definite if matrix_of is not None
+                                  else positive_definite)
+        if linear is None:
+            linear = [] if problem.L is None else [problem.L]
+        super().__init__(problem.a if bilinear is None else bilinear, linear, problem.solution,
+                         problem.bcs, prefix=name, options=petsc_options, keep_options=True,
+                         matrix_of=matrix_of)
+        self._residual = self.b.duplicate()
+        self._correction = self.b.duplicate()
+        self._x: PETSc.Vec | None = None
+
+    def assemble_matrix(self) -> None:
+        super().assemble_matrix()
+        if self.positive_definite:
+            # MUMPS then factorises L L^T, without pivoting (read at the first factorisation)
+            self.A.setOption(PETSc.Mat.Option.SPD, True)
+
+    def solve(self, matrix: bool = True) -> dolfinx.fem.Function:
+        """Assemble K and F at the problem's current state and solve for problem.u (and the
+        pressure)."""
+        super().solve(matrix)
+        self.problem.after_solve()
+        return self.u
+
+    def solve_system(self, x: PETSc.Vec, b: PETSc.Vec | None = None) -> None:
+        super().solve_system(x, b)
+        self._x = x
+
+    def error_estimate(self) -> float:
+        """Relative forward error of the last solve, ||A^-1 (b - A x)|| / ||x||: one step of
+        iterative refinement with the factors already computed (a matrix-vector product and a pair
+        of triangular solves, no new factorisation). A backward-stable LU leaves a residual of
+        rounding size, so the estimate is about the condition number of K times the machine
+        precision: it shows when a small penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear
+        systems ill-conditioned."""
+        x = self._x
+        start = time.perf_counter()
+        self.A.mult(x, self._residual)
+        self._residual.aypx(-1.0, self.b)
+        self.ksp.solve(self._residual, self._correction)
+        self.timings.solve += time.perf_counter() - start
+        norm = x.norm()
+        return self._correction.norm() / norm if norm > 0 else 0.0
+
+    def destroy(self) -> None:
+        """Free the PETSc objects and the options set under this solver's prefix."""
+        for item in (self._residual, self._correction):
+            item.destroy()
+        super().destroy()
