@@ -180,8 +180,8 @@ def test_a_strips_forces_are_the_whole_strips_per_unit_width_or_of_its_width():
     for key in ("drawing_force", "die_force_x", "die_normal_force_x", "die_friction_force_x",
                 "die_separation_force"):
         assert wide[key] == pytest.approx(2.5 * per_width[key], rel=1e-8), key
-    assert wide["drawing_force"] == pytest.approx(wide["drawing_stress"] * 0.080 * 2.5, rel=1e-12)
         assert wide["units"]["quantities"][key] == "lbf"
+    assert wide["drawing_force"] == pytest.approx(wide["drawing_stress"] * 0.080 * 2.5, rel=1e-12)
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "drawing"},
                          "geometry": {"symmetry": "axisymmetric", "width": 1.0}})
