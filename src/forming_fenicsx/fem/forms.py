@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import dolfinx.fem
 import dolfinx.fem.petsc
-import numpy as np
 import ufl
 from petsc4py import PETSc
 

@@ -2,20 +2,10 @@
 from __future__ import annotations
 import itertools
 import json
-import logging
 import math
-import re
-import time
-import tomllib
-from pathlib import Path
 from typing import Any
-from mpi4py import MPI
-from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.numbers import is_number
-from forming_fenicsx.io.output import json_safe
 from forming_fenicsx.core.richardson import MIN_ORDER, richardson
-from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.core.units import Units
 
 
 QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}

@@ -3,7 +3,6 @@ from __future__ import annotations
 import itertools
 import json
 import logging
-import math
 import re
 import time
 import tomllib
@@ -16,7 +15,6 @@ from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.config.loader import (apply_overrides, parse_override, read_scene_data,
                                            scene_from_dict)
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.core.units import Units
 from forming_fenicsx.app.study.analysis import QUANTITIES, settings_key, exact_value, find_optima, has_reference, is_design_key, references, value
 from forming_fenicsx.app.study.report import write_csv, report
 

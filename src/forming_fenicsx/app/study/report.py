@@ -1,21 +1,11 @@
 """A study's report: study.md (runs, optima, the cheapest settings) and study.csv."""
 from __future__ import annotations
-import itertools
-import json
-import logging
 import math
-import re
-import time
-import tomllib
 from pathlib import Path
 from typing import Any
-from mpi4py import MPI
-from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.io.output import json_safe
 from forming_fenicsx.core.report import markdown_table
-from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.core.units import Units
-from forming_fenicsx.app.study.analysis import cheapest, has_reference, is_design_key, references, relative_error, value
+from forming_fenicsx.app.study.analysis import cheapest, has_reference, is_design_key, relative_error, value
 
 
 def _unit_label(units: Units, name: str, whole_forces: bool) -> str:
