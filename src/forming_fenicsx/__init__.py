@@ -1,4 +1,5 @@
-"""forming-fenicsx: steady-state strip extrusion and drawing by the flow formulation (Angelov 2014)."""
+"""forming-fenicsx: steady-state strip extrusion and drawing by the flow formulation (Angelov
+2014)."""
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.config.scene import Scene

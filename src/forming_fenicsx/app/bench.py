@@ -1,10 +1,11 @@
 """`forming bench`: the nonlinear solvers side by side on Example 1 and Example 2, with their costs.
 
-Each case (example, mesh size, method, MPI ranks) runs in a process of its own (``mpirun -n R python -m
-forming_fenicsx.app.bench --case JSON``), so that its peak memory and time are its own; the parent collects
-one JSON line per case and prints and writes the table. All methods use the secant at the Gauss points
-(Newton needs it), so that every method solves the same discrete problem and their results can be
-compared: "vs direct" is the relative difference from the direct method on the same mesh and ranks.
+Each case (example, mesh size, method, MPI ranks) runs in a process of its own (``mpirun -n R
+python -m forming_fenicsx.app.bench --case JSON``), so that its peak memory and time are its own;
+the parent collects one JSON line per case and prints and writes the table. All methods use the
+secant at the Gauss points (Newton needs it), so that every method solves the same discrete
+problem and their results can be compared: "vs direct" is the relative difference from the direct
+method on the same mesh and ranks.
 """
 from __future__ import annotations
 
@@ -55,11 +56,13 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     else:
         scene_file, quantity, settings = EXAMPLES[case["example"]]
     data = read_scene_data(DEMOS / scene_file, [
-        *settings, f"discretisation.mesh_size={case['mesh_size']}", "discretisation.averaging=quadrature",
-        f"solver.method={case['method']}", f"discretisation.formulation={case.get('formulation', 'penalty')}",
+        *settings, f"discretisation.mesh_size={case['mesh_size']}",
+        "discretisation.averaging=quadrature", f"solver.method={case['method']}",
+        f"discretisation.formulation={case.get('formulation', 'penalty')}",
         "solver.max_iterations=1000", "output.fields=false",
         "output.figures=false", *case.get("set", [])])
-    if case.get("symmetry") == "axisymmetric":  # the same mesh, as a round bar: thicknesses are diameters
+    # the same mesh, as a round bar: thicknesses are diameters
+    if case.get("symmetry") == "axisymmetric":
         geometry = data["geometry"]
         geometry["symmetry"] = "axisymmetric"
         for end in ("entry", "exit"):
@@ -78,7 +81,8 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
             "outside_per_solve_s": (split["assembly"] + split["rest"]) / solves,
             "factor_solve_per_solve_s": (split["factorisation"] + split["solve"]) / solves,
             "peak_memory_mb": peak, "quantity": quantity, "value": summary[quantity],
-            "exact": exact_value(scene, quantity), "force_balance_residual": summary["force_balance_residual"],
+            "exact": exact_value(scene, quantity),
+            "force_balance_residual": summary["force_balance_residual"],
             "solve_error_estimate": summary["solve_error_estimate"],
             "mean_flow_stress": summary.get("mean_flow_stress")}
 
@@ -87,10 +91,9 @@ def hardening_bench(ranks: int, mesh_size: float, repeat: int) -> list[dict[str,
     """Each HARDENING scene coupled, then with the flow stress frozen at the coupled run's mean
     flow stress (law rate_power, exponent 1e-3: the rate factor "none" of the hardening laws);
     the rows carry the coupled run's solves and time over the frozen run's. A first run of each,
-    not counted, compiles the forms: the frozen stress is a constant of the frozen run's forms, and
-    its compilation (7 to 9 s) had made one of every 3 frozen runs the slowest. The counted runs
-    alternate, coupled then frozen, so that a load on the machine that comes or goes between them
-    weighs on both."""
+    not counted, compiles the forms, so that no counted run pays for it (the frozen stress is a
+    constant of the frozen run's forms; docs/hardening.md). The counted runs alternate, coupled
+    then frozen, so that a load on the machine that comes or goes between them weighs on both."""
     rows = []
     for name, (*_, scale) in HARDENING.items():
         case = {"hardening": name, "mesh_size": round(mesh_size * scale, 9), "method": "newton"}
@@ -125,10 +128,11 @@ def hardening_table(rows: list[dict[str, Any]]) -> str:
 
 
 def median_run(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """The run of median wall time (the lower middle one of an even count), with every run's wall time:
-    on a shared machine one run's time is a sample, not a measurement."""
+    """The run of median wall time (the lower middle one of an even count), with every run's wall
+    time: on a shared machine one run's time is a sample, not a measurement."""
     ordered = sorted(runs, key=lambda row: row["wall_time_s"])
-    return {**ordered[(len(ordered) - 1) // 2], "wall_time_runs_s": [row["wall_time_s"] for row in runs]}
+    return {**ordered[(len(ordered) - 1) // 2],
+            "wall_time_runs_s": [row["wall_time_s"] for row in runs]}
 
 
 def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
@@ -146,15 +150,18 @@ def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
     return json.loads(rows[-1])
 
 
-def _counterpart(rows: list[dict[str, Any]], row: dict[str, Any], **changed: Any) -> dict[str, Any] | None:
+def _counterpart(rows: list[dict[str, Any]], row: dict[str, Any], **changed: Any
+                 ) -> dict[str, Any] | None:
     """The row of the same case as ``row`` but for the ``changed`` keys (e.g. method="direct")."""
     keys = ("example", "mesh_size", "ranks", "method", "formulation", "symmetry")
     wanted = {key: row.get(key) for key in keys} | changed
-    return next((r for r in rows if all(r.get(key) == value for key, value in wanted.items())), None)
+    return next((r for r in rows if all(r.get(key) == value for key, value in wanted.items())),
+                None)
 
 
 def compare(rows: list[dict[str, Any]]) -> None:
-    """Add the error against the exact value and the difference from the direct method (in place)."""
+    """Add the error against the exact value and the difference from the direct method (in
+    place)."""
     for row in rows:
         row["error"] = abs(row["value"] / row["exact"] - 1) if row.get("exact") else None
         direct = _counterpart(rows, row, method="direct")
@@ -176,40 +183,50 @@ def table(rows: list[dict[str, Any]]) -> str:
         return format(value, fmt) if value is not None else ""
 
     return markdown_table("forming bench", [
-        "example", "h", "ranks", "symmetry", "formulation", "method", "converged", "dofs", "linear solves", "wall s",
-        "wall s range", "setup s", "assembly s", "factorisation s", "solve s", "rest s", "post s", "outside/inside per solve",
-        "peak MB", "solve error", "quantity", "error", "vs direct", "speed-up vs direct", "speed-up vs 1 rank",
+        "example", "h", "ranks", "symmetry", "formulation", "method", "converged", "dofs",
+        "linear solves", "wall s", "wall s range", "setup s", "assembly s", "factorisation s",
+        "solve s", "rest s", "post s", "outside/inside per solve", "peak MB", "solve error",
+        "quantity", "error", "vs direct", "speed-up vs direct", "speed-up vs 1 rank",
         "time vs plane strain"],
-        [[r["example"], r["mesh_size"], r["ranks"], r.get("symmetry", "plane_strain"), r.get("formulation", "penalty"), r["method"], r["converged"],
+        [[r["example"], r["mesh_size"], r["ranks"], r.get("symmetry", "plane_strain"),
+          r.get("formulation", "penalty"), r["method"], r["converged"],
           r["dofs"], r["linear_solves"], f"{r['wall_time_s']:.2f}",
-          _spread(r.get("wall_time_runs_s", [r["wall_time_s"]])), f"{r['setup_s']:.2f}", f"{r['assembly_s']:.2f}",
-          f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}", f"{r['rest_s']:.2f}",
-          f"{r.get('postprocess_s', 0.0):.2f}", f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}",
-          f"{r['peak_memory_mb']:.0f}", number(r.get("solve_error_estimate"), ".1e"), f"{r['value']:.6g}",
-          number(r["error"], ".2e"), number(r["vs_direct"], ".1e"), number(r["speedup_vs_direct"], ".2f"),
-          number(r["speedup_vs_1_rank"], ".2f"), number(r.get("time_vs_plane_strain"), ".2f")] for r in rows])
+          _spread(r.get("wall_time_runs_s", [r["wall_time_s"]])), f"{r['setup_s']:.2f}",
+          f"{r['assembly_s']:.2f}", f"{r['factorisation_s']:.2f}", f"{r['solve_s']:.2f}",
+          f"{r['rest_s']:.2f}", f"{r.get('postprocess_s', 0.0):.2f}",
+          f"{r['outside_per_solve_s'] / r['factor_solve_per_solve_s']:.2f}",
+          f"{r['peak_memory_mb']:.0f}", number(r.get("solve_error_estimate"), ".1e"),
+          f"{r['value']:.6g}", number(r["error"], ".2e"), number(r["vs_direct"], ".1e"),
+          number(r["speedup_vs_direct"], ".2f"), number(r["speedup_vs_1_rank"], ".2f"),
+          number(r.get("time_vs_plane_strain"), ".2f")] for r in rows])
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="forming bench", description=__doc__.splitlines()[0])
     parser.add_argument("--case", help=argparse.SUPPRESS)  # one case, in a child process
-    parser.add_argument("--examples", type=int, nargs="+", default=[1, 2], choices=sorted(EXAMPLES))
-    parser.add_argument("--sizes", type=float, nargs="+", help="mesh sizes (default: two per example)")
+    parser.add_argument("--examples", type=int, nargs="+", default=[1, 2],
+                        choices=sorted(EXAMPLES))
+    parser.add_argument("--sizes", type=float, nargs="+",
+                        help="mesh sizes (default: two per example)")
     parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
-    parser.add_argument("--formulations", nargs="+", default=["penalty"], choices=["penalty", "mixed"],
+    parser.add_argument("--formulations", nargs="+", default=["penalty"],
+                        choices=["penalty", "mixed"],
                         help="incompressibility by penalty and/or the mixed formulation")
     parser.add_argument("--symmetries", nargs="+", default=["plane_strain"],
                         choices=["plane_strain", "axisymmetric"],
-                        help="the examples as strips and/or round bars (thicknesses read as diameters)")
-    parser.add_argument("--ranks", type=int, nargs="+", default=[1], help="MPI ranks of each case (e.g. 1 2)")
+                        help="the examples as strips and/or round bars "
+                             "(thicknesses read as diameters)")
+    parser.add_argument("--ranks", type=int, nargs="+", default=[1],
+                        help="MPI ranks of each case (e.g. 1 2)")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                         help="override a scene value in every case")
     parser.add_argument("--repeat", type=int, default=1,
-                        help="run every case once per round, so many rounds, and keep each case's run of "
-                             "median wall time")
+                        help="run every case once per round, so many rounds, and keep each "
+                             "case's run of median wall time")
     parser.add_argument("--hardening", action="store_true",
-                        help="the hardening scenes instead of the examples: each coupled and with the "
-                             "flow stress frozen at its mean (the first --ranks and --sizes; h 0.06 mm)")
+                        help="the hardening scenes instead of the examples: each coupled and "
+                             "with the flow stress frozen at its mean (the first --ranks and "
+                             "--sizes; h 0.06 mm)")
     parser.add_argument("--out", default="results/bench.json")
     args = parser.parse_args(argv)
     if args.repeat < 1:
@@ -222,7 +239,8 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(row), flush=True)
         return 0
     if "OMPI_COMM_WORLD_SIZE" in os.environ or "PMI_RANK" in os.environ:
-        print("forming bench: run it without mpirun; --ranks sets the ranks of each case", file=sys.stderr)
+        print("forming bench: run it without mpirun; --ranks sets the ranks of each case",
+              file=sys.stderr)
         return 2
     if args.hardening:
         rows = hardening_bench(args.ranks[0], (args.sizes or [0.06])[0], args.repeat)
@@ -234,12 +252,14 @@ def main(argv: list[str] | None = None) -> int:
              for ranks in args.ranks for formulation in args.formulations for method in args.methods
              for symmetry in args.symmetries]
     runs: list[list[dict[str, Any]]] = [[] for _ in cases]
-    for round_ in range(1, args.repeat + 1):  # every case once per round: a slow spell of the machine
-        for (case, ranks), case_runs in zip(cases, runs, strict=True):  # falls on all cases alike
+    # every case once per round: a slow spell of the machine falls on all cases alike
+    for round_ in range(1, args.repeat + 1):
+        for (case, ranks), case_runs in zip(cases, runs, strict=True):
             case_runs.append(_launch(case, ranks))
             print(f"run {round_}/{args.repeat}: example {case['example']}, {case['symmetry']}, "
                   f"h = {case['mesh_size']}, {ranks} rank(s), "
-                  f"{case['formulation']}, {case['method']}: {case_runs[-1]['linear_solves']} solves, "
+                  f"{case['formulation']}, {case['method']}: "
+                  f"{case_runs[-1]['linear_solves']} solves, "
                   f"{case_runs[-1]['wall_time_s']:.2f} s", flush=True)
     rows = [median_run(case_runs) for case_runs in runs]
     compare(rows)

@@ -56,7 +56,8 @@ def _is_study(path: str) -> bool:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="forming", description="Steady-state metal forming (Angelov 2014).")
+    parser = argparse.ArgumentParser(prog="forming",
+                                     description="Steady-state metal forming (Angelov 2014).")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="solve a scene and write its results")
     run.add_argument("scene", help="scene TOML file")
@@ -65,13 +66,15 @@ def _parser() -> argparse.ArgumentParser:
                      help="override a scene value (repeatable)")
     run.add_argument("--quiet", action="store_true", help="log warnings only")
     run.add_argument("--force", action="store_true", help="replace an existing output folder")
-    run.add_argument("--restart", metavar="DIR", help="start from the velocity of a previous run of the same mesh")
+    run.add_argument("--restart", metavar="DIR",
+                     help="start from the velocity of a previous run of the same mesh")
     run.add_argument("--accuracy", metavar="TARGET",
                      help="refine the mesh until the estimated relative error of the main quantity "
                      "is below TARGET (1%%, 0.3%% or 0.01): accuracy.target")
     study = sub.add_parser("study", help="run a grid of variations of a scene: a design sweep "
                            "(quantities against a parameter, optimum) or errors against costs")
-    study.add_argument("scene", help="scene TOML file, or a study file (a [study] table: scene, vary, set, quantity)")
+    study.add_argument("scene", help="scene TOML file, or a study file "
+                       "(a [study] table: scene, vary, set, quantity)")
     study.add_argument("--vary", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
                        help="a key and its values (repeatable; the grid is every combination)")
     study.add_argument("--out", help="output folder (default: results/<scene name>_study)")
@@ -79,11 +82,12 @@ def _parser() -> argparse.ArgumentParser:
                        help="summary keys to measure (repeatable or comma-separated; default: "
                        "ram_pressure or mean_die_pressure)")
     study.add_argument("--keep-runs", action="store_true",
-                       help="keep each run's output folder (summary, fields, figures) in OUT/runs/")
+                       help="keep each run's output folder (summary, fields, figures) in "
+                       "OUT/runs/")
     study.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
     study.add_argument("--quiet", action="store_true", help="log warnings only")
-    sub.add_parser("bench", help="the nonlinear solvers side by side on both examples: solves, times, memory "
-                   "(forming bench --help)", add_help=False)
+    sub.add_parser("bench", help="the nonlinear solvers side by side on both examples: solves, "
+                   "times, memory (forming bench --help)", add_help=False)
     mesh = sub.add_parser("mesh", help="write the scene's mesh as a Gmsh .msh file")
     mesh.add_argument("scene", help="scene TOML file")
     mesh.add_argument("-o", "--output", required=True, help="the .msh file to write")
@@ -92,14 +96,15 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _not_a_compiler_line(record: logging.LogRecord) -> bool:
-    """False for the C compiler's build lines: when FFCx compiles a form, setuptools logs every compile
-    and link command through the root logger, whose handler FFCx installed (about 30 lines a run)."""
+    """False for the C compiler's build lines: when FFCx compiles a form, setuptools logs every
+    compile and link command through the root logger, whose handler FFCx installed (about 30 lines
+    a run)."""
     return not ("distutils" in record.pathname or "setuptools" in record.pathname)
 
 
 def configure_logging(quiet: bool, rank: int) -> None:
-    """The application's own handler, on rank 0 only; the root logger's level is left alone, and its
-    handlers drop the compiler's build lines (_not_a_compiler_line)."""
+    """The application's own handler, on rank 0 only; the root logger's level is left alone, and
+    its handlers drop the compiler's build lines (_not_a_compiler_line)."""
     for handler in logging.getLogger().handlers:
         if _not_a_compiler_line not in handler.filters:
             handler.addFilter(_not_a_compiler_line)
@@ -159,7 +164,8 @@ def _main(argv: list[str] | None) -> int:
             if not vary + args.vary:
                 raise SceneError("--vary", "a study needs at least one --vary (or a study file)")
             stem = Path(args.scene).name.split(".")[0]
-            out = Path(args.out) if args.out else Path("results") / (stem if study_file else f"{stem}_study")
+            out = (Path(args.out) if args.out
+                   else Path("results") / (stem if study_file else f"{stem}_study"))
             quantities = parse_quantities(args.quantity) or quantities
             rows = run_study(data, vary + args.vary, out, quantities, comm,
                              keep_runs=args.keep_runs)
@@ -198,8 +204,9 @@ def _main(argv: list[str] | None) -> int:
 
     previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem, overwrite=args.force,
-                            stop=stop, restart=Path(args.restart) if args.restart else None)
+        summary = run_scene(scene, out, petsc_options, comm, title=Path(args.scene).stem,
+                            overwrite=args.force, stop=stop,
+                            restart=Path(args.restart) if args.restart else None)
     except (FileExistsError, FileNotFoundError, ValueError) as error:
         if comm.rank == 0:
             print(f"forming: {error}", file=sys.stderr)
@@ -215,8 +222,8 @@ def _main(argv: list[str] | None) -> int:
             signal.signal(sig, handler)
     if not summary["converged"]:
         if comm.rank == 0:
-            print(f"forming: not converged: {summary['reason']}; the last iterate's results are in {out}",
-                  file=sys.stderr)
+            print(f"forming: not converged: {summary['reason']}; the last iterate's results are "
+                  f"in {out}", file=sys.stderr)
         return 3
     if not summary.get("accuracy", {"reached": True})["reached"]:
         accuracy = summary["accuracy"]

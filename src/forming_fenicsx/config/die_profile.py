@@ -106,7 +106,8 @@ class DieProfile:
     def effective_angle(self) -> float:
         """Semi-angle (degrees) of the chord from the die entry to the land: the die's angle for a
         straight cone, the angle a two-angle, radiused or CSV die is compared by."""
-        return math.degrees(math.atan2(self.start[1] - self.end[1], self.land_start - self.start[0]))
+        return math.degrees(math.atan2(self.start[1] - self.end[1],
+                                       self.land_start - self.start[0]))
 
     @property
     def length(self) -> float:

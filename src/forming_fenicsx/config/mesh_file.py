@@ -1,7 +1,8 @@
-"""A user's Gmsh .msh file (geometry.mesh_file): its checks and the dimensions the scene takes from it.
+"""A user's Gmsh .msh file (geometry.mesh_file): its checks and the dimensions the scene takes
+from it.
 
-The workpiece flows along +x with its symmetry line on y = 0; its entry and exit half-thicknesses are
-the largest y on its upstream (smallest x) and downstream (largest x) end faces.
+The workpiece flows along +x with its symmetry line on y = 0; its entry and exit half-thicknesses
+are the largest y on its upstream (smallest x) and downstream (largest x) end faces.
 """
 from __future__ import annotations
 
@@ -30,8 +31,8 @@ def gmsh_session():
 
 @dataclass(frozen=True)
 class MeshDimensions:
-    """Extent of a user's workpiece mesh: full entry and exit thicknesses (twice the half model's) and
-    the length along x."""
+    """Extent of a user's workpiece mesh: full entry and exit thicknesses (twice the half model's)
+    and the length along x."""
 
     entry_thickness: float
     exit_thickness: float
@@ -47,8 +48,10 @@ def _quad_jacobians() -> np.ndarray:
     for element_type in QUADRILATERALS:
         if element_type not in gmsh.model.mesh.getElementTypes(2):
             continue
-        nodes = gmsh.model.mesh.getElementsByType(element_type)[1].reshape(-1, 4 if element_type == 3 else 9)
-        x = points.reshape(-1, 3)[[[position[n] for n in quad[:4]] for quad in nodes.tolist()]][:, :, :2]
+        nodes = gmsh.model.mesh.getElementsByType(element_type)[1].reshape(
+            -1, 4 if element_type == 3 else 9)
+        x = points.reshape(-1, 3)[[[position[n] for n in quad[:4]]
+                                   for quad in nodes.tolist()]][:, :, :2]
         following, preceding = np.roll(x, -1, axis=1) - x, np.roll(x, 1, axis=1) - x
         corners = following[:, :, 0] * preceding[:, :, 1] - following[:, :, 1] * preceding[:, :, 0]
         d1, d2 = x[:, 2] - x[:, 0], x[:, 3] - x[:, 1]
@@ -66,7 +69,8 @@ def _open(path: str) -> None:
 
 def _role_names() -> dict[int, str]:
     """The current model's boundary groups: file tag -> name."""
-    return {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in gmsh.model.getPhysicalGroups() if dim == 1}
+    return {tag: gmsh.model.getPhysicalName(1, tag) for dim, tag in gmsh.model.getPhysicalGroups()
+            if dim == 1}
 
 
 def open_msh(path: str) -> dict[int, int]:
@@ -77,11 +81,12 @@ def open_msh(path: str) -> dict[int, int]:
 
 
 def _check_msh(path: str) -> MeshDimensions:
-    """Open a user's .msh in the current gmsh session and check it; returns the workpiece's dimensions.
+    """Open a user's .msh in the current gmsh session and check it; returns the workpiece's
+    dimensions.
 
-    Raises SceneError (key geometry.mesh_file) for a mesh that is not plane 2-D, has cells other than
-    quadrilaterals, misses a required role, names unknown roles, gives one edge two roles, or has
-    inverted or degenerate elements.
+    Raises SceneError (key geometry.mesh_file) for a mesh that is not plane 2-D, has cells other
+    than quadrilaterals, misses a required role, names unknown roles, gives one edge two roles, or
+    has inverted or degenerate elements.
     """
     def fail(message: str) -> None:
         raise SceneError("geometry.mesh_file", f"{path}: {message}")
@@ -121,18 +126,21 @@ def _check_msh(path: str) -> MeshDimensions:
     largest = np.abs(determinants).max()
     if determinants.min() * determinants.max() < 0:
         flipped = int((np.sign(determinants) != np.sign(np.median(determinants))).sum())
-        fail(f"inverted elements: the Jacobian changes sign ({flipped} of the corner and centre points of the cells)")
+        fail(f"inverted elements: the Jacobian changes sign ({flipped} of the corner and centre "
+             "points of the cells)")
     if np.abs(determinants).min() < 1e-10 * largest:
         fail("degenerate elements: a Jacobian determinant is (nearly) zero")
     x, y = coordinates[:, 0], coordinates[:, 1]
     if y.min() < -1e-9 * extent:
-        fail(f"nodes below y = 0 (down to y = {y.min():.6g}): the half model lies on y >= 0 with its "
-             "symmetry line on y = 0")
+        fail(f"nodes below y = 0 (down to y = {y.min():.6g}): the half model lies on y >= 0 with "
+             "its symmetry line on y = 0")
     upstream, downstream = x <= x.min() + 1e-9 * extent, x >= x.max() - 1e-9 * extent
-    return MeshDimensions(2 * float(y[upstream].max()), 2 * float(y[downstream].max()), float(np.ptp(x)))
+    return MeshDimensions(2 * float(y[upstream].max()), 2 * float(y[downstream].max()),
+                          float(np.ptp(x)))
 
 
 def mesh_dimensions(path: str) -> MeshDimensions:
-    """Check a user's .msh file (_check_msh) in a gmsh session of its own and return its dimensions."""
+    """Check a user's .msh file (_check_msh) in a gmsh session of its own and return its
+    dimensions."""
     with gmsh_session():
         return _check_msh(path)

@@ -1,6 +1,6 @@
 """Anderson acceleration of a fixed point x = g(x) over distributed vectors (Walker & Ni, SIAM J.
-Numer. Anal. 49 (2011) 1715), for the coefficients coupled to the flow through the frozen-coefficient
-loop (frozen.py): the transported strain (strain_transport.py).
+Numer. Anal. 49 (2011) 1715), for the coefficients coupled to the flow through the
+frozen-coefficient loop (frozen.py): the temperature (thermal.py).
 
 With the residuals f_k = g(x_k) - x_k and the last ``depth`` differences
 dF = [f_k - f_{k-1}, ...], dG = [g(x_k) - g(x_{k-1}), ...], the next iterate is

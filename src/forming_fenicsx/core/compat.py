@@ -84,14 +84,17 @@ def geometry_degree(mesh) -> int:
 
 
 def quadrature_space(mesh, degree: int, shape: tuple[int, ...]):
-    """Values at the Gauss points of ``ufl.dx(metadata={"quadrature_degree": degree})``, per cell."""
+    """Values at the Gauss points of ``ufl.dx(metadata={"quadrature_degree": degree})``, per
+    cell."""
     if LEGACY:
         import ufl
 
         if len(shape) == 1:
-            element = ufl.VectorElement("Quadrature", mesh.ufl_cell(), degree, dim=shape[0], quad_scheme="default")
+            element = ufl.VectorElement("Quadrature", mesh.ufl_cell(), degree, dim=shape[0],
+                                        quad_scheme="default")
         else:
-            element = ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, quad_scheme="default", shape=shape)
+            element = ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree,
+                                        quad_scheme="default", shape=shape)
         return dolfinx.fem.FunctionSpace(mesh, element)
     import basix.ufl
 
@@ -103,8 +106,9 @@ def quadrature_points(mesh, degree: int) -> np.ndarray:
     """Reference Gauss points of the default scheme of that degree on the mesh's cells."""
     import basix
 
-    cell = basix.CellType.quadrilateral if mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral \
-        else basix.CellType.triangle
+    cell = (basix.CellType.quadrilateral
+            if mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral
+            else basix.CellType.triangle)
     return basix.make_quadrature(cell, degree)[0]
 
 
@@ -115,8 +119,10 @@ def cell_dofs(dofmap) -> np.ndarray:
     return np.asarray(dofmap.list)
 
 
-def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx.fem.Expression) -> None:
-    """function <- expression evaluated at the Gauss points of every local cell (then ghosts updated)."""
+def set_at_quadrature_points(function: dolfinx.fem.Function,
+                             expression: dolfinx.fem.Expression) -> None:
+    """function <- expression evaluated at the Gauss points of every local cell (then ghosts
+    updated)."""
     mesh = function.function_space.mesh
     cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
     values = expression.eval(cells) if LEGACY else expression.eval(mesh, cells)
@@ -128,8 +134,8 @@ def set_at_quadrature_points(function: dolfinx.fem.Function, expression: dolfinx
 
 
 def mixed_space(mesh, velocity_degree: int, pressure_family: str, pressure_degree: int):
-    """The velocity-pressure space (vector Lagrange x ``pressure_family``, e.g. "DPC" for P1 discontinuous
-    on quadrilaterals)."""
+    """The velocity-pressure space (vector Lagrange x ``pressure_family``, e.g. "DPC" for P1
+    discontinuous on quadrilaterals)."""
     if LEGACY:
         import ufl
 

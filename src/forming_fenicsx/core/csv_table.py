@@ -16,10 +16,11 @@ def column_name(header: str) -> str:
     return header.split("[", 1)[0].strip().lower()
 
 
-def read_rows(path: str | Path, key: str, header: tuple[str, ...]) -> list[tuple[int, list[float]]]:
-    """(row number, values) of every non-blank row after the header, which must be ``header`` (units
-    in brackets allowed). Refused, naming ``key``: a missing file, another header, a row that is not
-    len(header) finite numbers."""
+def read_rows(path: str | Path, key: str, header: tuple[str, ...]
+              ) -> list[tuple[int, list[float]]]:
+    """(row number, values) of every non-blank row after the header, which must be ``header``
+    (units in brackets allowed). Refused, naming ``key``: a missing file, another header, a row that
+    is not len(header) finite numbers."""
     path = Path(path)
     names = ",".join(header)
     if not path.is_file():
@@ -35,9 +36,11 @@ def read_rows(path: str | Path, key: str, header: tuple[str, ...]) -> list[tuple
         try:
             values = [float(c) for c in row]
         except ValueError:
-            raise SceneError(key, f"{path.name} row {number}: not {WORDS.get(len(header), len(header))} numbers: {row}") from None
+            raise SceneError(key, f"{path.name} row {number}: not "
+                                  f"{WORDS.get(len(header), len(header))} numbers: {row}") from None
         if len(values) != len(header) or not all(math.isfinite(v) for v in values):
-            raise SceneError(key, f"{path.name} row {number}: need {WORDS.get(len(header), len(header))} finite "
+            raise SceneError(key, f"{path.name} row {number}: need "
+                                  f"{WORDS.get(len(header), len(header))} finite "
                                   f"numbers; got {row}")
         found.append((number, values))
     return found

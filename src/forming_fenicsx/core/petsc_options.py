@@ -1,5 +1,5 @@
-"""PETSc options of one solver under a named prefix (``flow_``, ``normal_stress_filter_``), so that a
-user can address each solver's options (e.g. ``-flow_ksp_view`` on the command line)."""
+"""PETSc options of one solver under a named prefix (``flow_``, ``normal_stress_filter_``), so that
+a user can address each solver's options (e.g. ``-flow_ksp_view`` on the command line)."""
 from __future__ import annotations
 
 from typing import Any

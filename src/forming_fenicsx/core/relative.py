@@ -13,10 +13,12 @@ def check_positive(key: str, value: float | None) -> None:
         raise SceneError(key, f"must be a finite number > 0; got {value}")
 
 
-def resolve_pair(section: str, table: Any, key: str, scale: float, default: float) -> tuple[float, float]:
-    """The absolute value of ``table.key`` and its relative value ``table.key_relative`` (= key / scale),
-    from whichever the table gives, else from the default relative value."""
-    name, absolute, relative = f"{section}.{key}", getattr(table, key), getattr(table, f"{key}_relative")
+def resolve_pair(section: str, table: Any, key: str, scale: float, default: float
+                 ) -> tuple[float, float]:
+    """The absolute value of ``table.key`` and its relative value ``table.key_relative``
+    (= key / scale), from whichever the table gives, else from the default relative value."""
+    name, absolute, relative = (f"{section}.{key}", getattr(table, key),
+                                getattr(table, f"{key}_relative"))
     if absolute is not None and relative is not None:
         raise SceneError(name, f"give {name} (absolute) or {name}_relative, not both")
     check_positive(name, absolute)
@@ -24,8 +26,9 @@ def resolve_pair(section: str, table: Any, key: str, scale: float, default: floa
     if absolute is None:
         absolute = (default if relative is None else relative) * scale
     if not (math.isfinite(scale) and scale > 0 and math.isfinite(absolute) and absolute > 0):
-        raise SceneError(name, f"its scale {scale:g} (from the scene's velocity, size and flow stress) makes it "
-                         f"{absolute:g}: give {name} or check the material's flow stress and the process data")
+        raise SceneError(name, f"its scale {scale:g} (from the scene's velocity, size and flow "
+                         f"stress) makes it {absolute:g}: give {name} or check the material's "
+                         "flow stress and the process data")
     return absolute, absolute / scale
 
 

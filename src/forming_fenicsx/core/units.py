@@ -2,14 +2,14 @@
 
 A scene may use any consistent system: a length unit L, a time unit T and a stress unit S, with
 velocities in L/T, strain rates in 1/T, forces in S L^2 (a strip's per unit width: S L, unless the
-scene gives its width) and the
-material constants in the units their law implies (e.g. A of sigma_p = A rate^n in S T^n). The
-``[units]`` section names them so that summary.json, the CSV headers and the figures say what the
-numbers are; known names are checked for consistency (force = stress x length^2).
+scene gives its width) and the material constants in the units their law implies (e.g. A of
+sigma_p = A rate^n in S T^n). The ``[units]`` section names them so that summary.json, the CSV
+headers and the figures say what the numbers are; known names are checked for consistency
+(force = stress x length^2).
 
 Temperatures are kelvin in the scene, the solver and summary.json; ``temperature = "C"`` shows them
-in Celsius in the figures and beside the kelvin column of the CSV files. A figure shows stresses far
-from 1 in the scene's unit (e.g. 1.2e8 Pa) in another unit of its family (120 MPa). Every such
+in Celsius in the figures and beside the kelvin column of the CSV files. A figure shows stresses
+far from 1 in the scene's unit (e.g. 1.2e8 Pa) in another unit of its family (120 MPa). Every such
 difference between the numbers stored and those shown is here.
 """
 from __future__ import annotations
@@ -22,11 +22,14 @@ import numpy as np
 from forming_fenicsx.core.errors import SceneError
 
 # SI factors of the unit names the consistency check knows; other names are taken as labels only
-LENGTHS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "km": 1e3, "in": 0.0254, "ft": 0.3048}
+LENGTHS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "km": 1e3, "in": 0.0254,
+           "ft": 0.3048}
 TIMES = {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0}
-STRESSES = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "N/mm2": 1e6, "N/mm^2": 1e6, "N/m2": 1.0,
-            "N/m^2": 1.0, "bar": 1e5, "psi": 6894.757293168361, "ksi": 6894757.293168361}
-FORCES = {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": 4.4482216152605, "kip": 4448.2216152605, "kgf": 9.80665}
+STRESSES = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "N/mm2": 1e6, "N/mm^2": 1e6,
+            "N/m2": 1.0, "N/m^2": 1.0, "bar": 1e5, "psi": 6894.757293168361,
+            "ksi": 6894757.293168361}
+FORCES = {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": 4.4482216152605, "kip": 4448.2216152605,
+          "kgf": 9.80665}
 # the stress units a figure may change to within a family, and the range of the largest value that
 # keeps the scene's own unit
 STRESS_FAMILIES = (("Pa", "kPa", "MPa", "GPa"), ("psi", "ksi"))
@@ -37,7 +40,8 @@ TEMPERATURE_ZEROS = {"K": 0.0, "C": 273.15}
 # the dimension of every quantity a run reports, by its key in summary.json and the CSV files
 DIMENSIONS = {
     "ram_pressure": "stress", "mean_hydrostatic_pressure": "stress", "drawing_stress": "stress",
-    "mean_die_pressure": "stress", "ram_force": "force_per_width", "drawing_force": "force_per_width",
+    "mean_die_pressure": "stress", "ram_force": "force_per_width",
+    "drawing_force": "force_per_width",
     "die_force_x": "force_per_width", "die_normal_force_x": "force_per_width",
     "die_friction_force_x": "force_per_width", "applied_force_x": "force_per_width",
     "die_separation_force": "force_per_width",
@@ -59,8 +63,8 @@ def bracketed(text: str, unit: str | None) -> str:
 
 @dataclass
 class Units:
-    """Labels of the scene's consistent unit system: ``length``, ``time``, ``stress``, ``force`` (each
-    optional; no conversion is done). Example: mm, s, MPa, N; m, s, Pa, N; in, s, psi, lbf.
+    """Labels of the scene's consistent unit system: ``length``, ``time``, ``stress``, ``force``
+    (each optional; no conversion is done). Example: mm, s, MPa, N; m, s, Pa, N; in, s, psi, lbf.
     ``temperature`` ("K", the default, or "C") is the unit figures and CSV files show temperatures
     in; they stay kelvin everywhere else."""
 
@@ -85,17 +89,20 @@ class Units:
             implied = STRESSES[self.stress] * LENGTHS[self.length] ** 2
             if not math.isclose(FORCES[self.force], implied, rel_tol=1e-6):
                 raise SceneError("units.force",
-                                 f"{self.force} is not {self.stress} x {self.length}^2 (= {implied:.6g} N): the "
-                                 f"units are not consistent; use {self._consistent_force()} or other units")
+                                 f"{self.force} is not {self.stress} x {self.length}^2 "
+                                 f"(= {implied:.6g} N): the units are not consistent; use "
+                                 f"{self._consistent_force()} or other units")
 
     def _consistent_force(self) -> str:
         implied = STRESSES[self.stress] * LENGTHS[self.length] ** 2
-        names = [name for name, value in FORCES.items() if math.isclose(value, implied, rel_tol=1e-6)]
+        names = [name for name, value in FORCES.items()
+                 if math.isclose(value, implied, rel_tol=1e-6)]
         return names[0] if names else f"a force unit of {implied:.6g} N"
 
     @property
     def given(self) -> bool:
-        """Whether the scene names a unit of its consistent system (length, time, stress, force)."""
+        """Whether the scene names a unit of its consistent system (length, time, stress,
+        force)."""
         return any(getattr(self, key) is not None for key in ("length", "time", "stress", "force"))
 
     @property
@@ -135,8 +142,8 @@ class Units:
         return columns
 
     def label(self, dimension: str) -> str | None:
-        """The unit of a dimension (length, time, stress, force, velocity, strain_rate, force_per_width,
-        temperature), or None when the labels it needs are not given."""
+        """The unit of a dimension (length, time, stress, force, velocity, strain_rate,
+        force_per_width, temperature), or None when the labels it needs are not given."""
         length, time, stress, force = self.length, self.time, self.stress, self.force
         if force is None and stress is not None and length is not None:
             force = f"{stress}*{length}^2"
@@ -154,7 +161,8 @@ class Units:
         return bracketed(text, self.label(dimension))
 
     def column(self, name: str) -> str:
-        """A CSV header: ``name [unit]`` for a quantity of DIMENSIONS when its unit is known, else ``name``."""
+        """A CSV header: ``name [unit]`` for a quantity of DIMENSIONS when its unit is known, else
+        ``name``."""
         return self.labelled(name, DIMENSIONS.get(name, ""))
 
     @staticmethod
@@ -166,9 +174,9 @@ class Units:
 
     def summary(self, keys: list[str], whole_forces: bool = False) -> dict[str, object]:
         """What summary.json says of the units: the labels, and the unit of each reported quantity
-        (``whole_forces`` as in ``dimension``); with
-        temperatures, ``temperature`` "K" (summary.json's) and ``temperature_shown`` when the
-        figures and CSV files show them in another unit."""
+        (``whole_forces`` as in ``dimension``); with temperatures, ``temperature`` "K"
+        (summary.json's) and ``temperature_shown`` when the figures and CSV files show them in
+        another unit."""
         temperatures = {}  # summary.json's temperatures are kelvin, whatever the figures show
         if self.temperature is not None or "temperature" in {DIMENSIONS.get(key) for key in keys}:
             temperatures["temperature"] = "K"
@@ -180,6 +188,7 @@ class Units:
 
         quantities = {key: self.label(self.dimension(key, whole_forces))
                       for key in keys if key in DIMENSIONS}
-        return {"length": self.length, "time": self.time, "stress": self.stress, "force": self.force,
+        return {"length": self.length, "time": self.time, "stress": self.stress,
+                "force": self.force,
                 **temperatures,
                 "quantities": {key: unit for key, unit in quantities.items() if unit}}

@@ -1,16 +1,16 @@
 """The transported strain in Newton's step: the reduced Jacobian of the coupled flow.
 
-With eps = eps(u) the transport solution (strain_transport.py, R(eps, u) = 0 with matrix D), the flow
-residual F(u, eps(u)) has the derivative
+With eps = eps(u) the transport solution (strain_transport.py, R(eps, u) = 0 with matrix D), the
+flow residual F(u, eps(u)) has the derivative
 
     J = A - B D^-1 C,   A = dF/du (Newton's operator, newton_forms.py), B = dF/deps, C = dR/du.
 
-Staggered, the step solves A du = F and the strain follows at the next freeze: where the velocity is
-sensitive to the strain the two creep towards each other by a fixed factor per step. Here J du = F is
-solved by GMRES, J applied matrix-free and right-preconditioned with A's factors, starting from
-A^-1 F: each iteration is a pair of triangular solves with A's factors and a transport solve with
-D (strain_transport.StrainField.transport_solve), so no matrix is factorised beyond the staggered
-step's.
+Staggered, the step solves A du = F and the strain follows at the next freeze: where the velocity
+is sensitive to the strain the two creep towards each other by a fixed factor per step. Here
+J du = F is solved by GMRES, J applied matrix-free and right-preconditioned with A's factors,
+starting from A^-1 F: each iteration is a pair of triangular solves with A's factors and a
+transport solve with D (strain_transport.StrainField.transport_solve), so no matrix is factorised
+beyond the staggered step's.
 """
 from __future__ import annotations
 

@@ -10,21 +10,17 @@ weight (2 pi y when axisymmetric), (u.n)^- = max(-u.n, 0), degree p (the velocit
   on every interior facet, (u.n)^- [eps] w W from the side the flow leaves (the jump to the
   upwind value is penalised where the flow enters a cell).
 Both impose the inflow condition weakly where the velocity enters (at more than 30 degrees to the
-boundary: not on die walls and free surfaces, which it follows), on any boundary shape, and
-are consistent (the exact eps satisfies them). A side the flow enters at less than 30 degrees gets
-no condition: there the error stalls (0.4 to 0.6 % on 32 cells at 20 degrees, orders below
-0.5, against p + 1 at 40 degrees).
+boundary: not on die walls and free surfaces, which it follows), on any boundary shape, and are
+consistent (the exact eps satisfies them). A side the flow enters at less than 30 degrees gets no
+condition, and the error there stalls (docs/strain_transport.md).
 
 docs/strain_transport.md compares them on velocities with exact strain
-(tests/test_strain_transport.py). Both reach the order p + 1 when the strain rate is accurate (Q1:
-1.98 to 2.11, Q2: 2.90 to 3.20) and order 2 for Q1 and Q2 alike with the velocity in Q_p, as the
-flow gives it (its strain rate is O(h^p); the two schemes then agree within 5 %). At a step of the
-inflow strain the largest over- or undershoot is, of the jump, 11 to 22 % (Q1) and 15 to 19 % (Q2)
-for SUPG, 35 to 39 % (Q1) and 28 to 38 % (Q2) for upwind DG, which is exact only when the step lies
-on a mesh line and the flow along the mesh lines; the values do not fall with refinement (the step
-as the quadrature points of the inflow side see it, projected on the element). Upwind DG has 3.9
-(Q1) and 2.2 (Q2) times the unknowns and took 2.3 to 2.9 times as long (1 rank). Hence SUPG, the
-default. One linear solve (GMRES with ILU(1), SOLVER; option prefix ``strain_``) per velocity.
+(tests/test_strain_transport.py): both reach the order p + 1 when the strain rate is accurate and
+agree with the velocity in Q_p, as the flow gives it (its strain rate is O(h^p): order 2 for Q1
+and Q2 alike). At a step of the inflow strain SUPG over- and undershoots about half as much as
+upwind DG (exact only when the step lies on a mesh line and the flow along the mesh lines), and
+upwind DG, with 2 to 4 times the unknowns, takes 2 to 3 times as long. Hence SUPG, the default.
+One linear solve (GMRES with ILU(1), SOLVER; option prefix ``strain_``) per velocity.
 """
 from __future__ import annotations
 
@@ -42,17 +38,15 @@ from forming_fenicsx.fem.linear_problem import DIRECT, LinearProblem
 from forming_fenicsx.physics.coordinates import CoordinateSystem
 
 PREFIX = "strain"
-# GMRES with block-Jacobi ILU(1) in reverse Cuthill-McKee order (MUMPS LU should it fail): on the
-# copper wire's h 0.03 mm (47 000 unknowns) 5 iterations and 0.06 s against 0.16 s for MUMPS LU,
-# on 2 ranks 18 and 0.07 s against 0.17 s; ILU(0) did not converge (docs/hardening.md). SUPG only:
-# upwind DG's error stalled at 1e-6 on the Q2 wedge with it (MUMPS LU there)
+# GMRES with block-Jacobi ILU(1) in reverse Cuthill-McKee order (MUMPS LU should it fail): faster
+# than MUMPS LU on the hardening scenes (ILU(0) does not converge there; docs/hardening.md). SUPG
+# only: upwind DG's error stalls with it (MUMPS LU there)
 SOLVER = {"ksp_type": "gmres", "ksp_rtol": 1e-10, "ksp_max_it": 200, "pc_type": "bjacobi",
           "sub_pc_type": "ilu", "sub_pc_factor_levels": 1, "sub_pc_factor_mat_ordering_type": "rcm"}
 # Newton's coupling switches from the relaxed step to the strain in the tangent once the strain
-# changes by less than TANGENT_FROM of its gain, or after TANGENT_AFTER relaxed freezes (docs/
-# hardening.md: 1e-2, 3e-2 and 1e-1 measured with the force balance that newton.py then requires,
-# 3e-2 the fastest on annealed copper; switching at once stopped 0.5 % off; the plane-strain
-# strip's relaxed step wandered for 200 steps)
+# changes by less than TANGENT_FROM of its gain (3e-2: the fastest of 1e-2, 3e-2 and 1e-1 on
+# annealed copper; switching at once stops short), or after TANGENT_AFTER relaxed freezes (a
+# relaxed step that never settles: the plane-strain strip); docs/hardening.md
 TANGENT_FROM = 3e-2
 TANGENT_AFTER = 12
 
@@ -146,7 +140,7 @@ class StrainField:
         """eps <- eps + relaxation (eps(u) - eps); with ``tangent_from`` > 0 (Newton), once the
         change of the gain falls below it (or after TANGENT_AFTER freezes), eps <- eps(u) with
         ``in_tangent`` set: Newton's step then carries the strain's derivative
-        (strain_tangent.py). Far from the answer the tangent's steps stopped short of it on
+        (strain_tangent.py). Far from the answer the tangent's steps stop short of it on
         pre-strained stock; near it the relaxed step crawls along the slow mode of strain and
         velocity following each other (docs/hardening.md: the couplings measured)."""
         if not self.in_tangent and self._tangent_from > 0.0:
@@ -183,8 +177,8 @@ class StrainField:
     def _change_of_gain(self, u: dolfinx.fem.Function) -> float:
         """||eps(u) - eps|| / ||eps(u) - eps_start||, eps_start the strain of the first freeze: on a
         pre-strained stock ||eps(u)|| is mostly the inflow strain, and a change relative to it
-        switched to the tangent while Newton's steps were still 3 % of u (a third pass of
-        demos/copper_wire_schedule.py, which then stopped 12 % off the force balance)."""
+        would switch to the tangent while the velocity still moves by percents
+        (docs/hardening.md)."""
         if self._start is None:
             self._start = self.eps.copy()
             self._gained = dolfinx.fem.form((self._candidate - self._start) ** 2 * self._dx)

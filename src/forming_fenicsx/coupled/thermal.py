@@ -261,8 +261,8 @@ class TemperatureField:
         exchange_<name> = int h (T - T_a) ds (heat to a tool or the air), plastic_power =
         int P dx, generated = beta times it, friction_to_workpiece = f int q_f ds; ``residual`` =
         (advected + exchanges - generated - friction_to_workpiece) / (generated +
-        friction_to_workpiece), zero for the
-        exact T of a divergence-free u (discretely, up to int rho c (T - T_0) div u and quadrature).
+        friction_to_workpiece), zero for the exact T of a divergence-free u (discretely, up to
+        int rho c (T - T_0) div u and quadrature).
         With ``process_power`` (ram or drawing force times the process velocity) also the global
         balance: it must equal the heat leaving (advected + exchanges + friction_to_die) plus the
         work stored, (1 - beta) int P dx: ``global_residual`` is the difference over it."""

@@ -12,23 +12,27 @@ from forming_fenicsx.physics.contact import contact_pressure
 class ContactMultiplier:
     """The augmented Lagrangian's multiplier lambda on the traces of P1 on Gamma3 (zero elsewhere).
 
-    Uzawa's update sets lambda to the nodal mean (lumped projection, non-negative) of (lambda + u_N/d_N)^+
-    over the die at the velocity ``state``. The solvers update it once their iterate has nearly settled
-    (``settled``): an inexact augmented Lagrangian; updating after every iterate lets lambda grow while a
-    damped iteration barely moves u, and diverges."""
+    Uzawa's update sets lambda to the nodal mean (lumped projection, non-negative) of
+    (lambda + u_N/d_N)^+ over the die at the velocity ``state``. The solvers update it once their
+    iterate has nearly settled (``settled``): an inexact augmented Lagrangian; updating after every
+    iterate lets lambda grow while a damped iteration barely moves u, and diverges."""
 
-    WINDOW = 100.0  # update once the iterate's increment is below WINDOW * delta; end once the update
-    #                 would change lambda by less than WINDOW * delta (relative, nodal values)
+    # update once the iterate's increment is below WINDOW * delta; end once the update would change
+    # lambda by less than WINDOW * delta (relative, nodal values)
+    WINDOW = 100.0
 
     def __init__(self, state: dolfinx.fem.Function, n, d_N: float, ds_contact, degree: int):
-        self.value = dolfinx.fem.Function(function_space(state.function_space.mesh, "P", 1), name="contact_multiplier")
-        self._projector = LumpedProjector(contact_pressure(state, n, d_N, self.value), self.value, degree, ds_contact)
+        self.value = dolfinx.fem.Function(function_space(state.function_space.mesh, "P", 1),
+                                          name="contact_multiplier")
+        self._projector = LumpedProjector(contact_pressure(state, n, d_N, self.value), self.value,
+                                          degree, ds_contact)
         self._before = petsc_vec(self.value).duplicate()
         self.updates = 0
 
     def update(self, keep_below: float = 0.0) -> float:
-        """lambda <- (lambda + u_N/d_N)^+ at the current state, unless that changes lambda by less than
-        ``keep_below``; returns the relative change ||lambda_new - lambda|| / ||lambda_new||."""
+        """lambda <- (lambda + u_N/d_N)^+ at the current state, unless that changes lambda by less
+        than ``keep_below``; returns the relative change
+        ||lambda_new - lambda|| / ||lambda_new||."""
         vector, before = petsc_vec(self.value), self._before
         vector.copy(before)
         self._projector.project()
@@ -43,9 +47,9 @@ class ContactMultiplier:
         return change
 
     def settled(self, increment: float, delta: float) -> bool:
-        """Called after every iterate (increment: its relative change, taken in full): updates lambda once
-        the increment is below WINDOW * delta; True when lambda needs no update (a change below WINDOW *
-        delta), so that the iteration may end."""
+        """Called after every iterate (increment: its relative change, taken in full): updates
+        lambda once the increment is below WINDOW * delta; True when lambda needs no update (a
+        change below WINDOW * delta), so that the iteration may end."""
         if increment >= self.WINDOW * delta:
             return False
         return self.update(keep_below=self.WINDOW * delta) < self.WINDOW * delta

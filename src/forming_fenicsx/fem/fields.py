@@ -1,5 +1,6 @@
-"""The unknowns of a flow problem and their boundary conditions: the velocity (penalty formulation),
-or velocity and pressure (mixed), with the constraints (2.5) on Gamma1 and (2.8) on Gamma6."""
+"""The unknowns of a flow problem and their boundary conditions: the velocity (penalty
+formulation), or velocity and pressure (mixed), with the constraints (2.5) on Gamma1 and (2.8) on
+Gamma6."""
 from __future__ import annotations
 
 import dolfinx.fem
@@ -50,8 +51,9 @@ class FlowFields:
         return self.facet_tags.indices[self.facet_tags.values == ROLES[role]]
 
     def boundary_dofs(self, role: str, component: int, space=None) -> np.ndarray:
-        """Local dof indices (blocked space, unrolled) of one velocity component on a boundary role, in
-        ``space`` (default the velocity space V; the mixed formulation's velocity subspace for its bcs)."""
+        """Local dof indices (blocked space, unrolled) of one velocity component on a boundary
+        role, in ``space`` (default the velocity space V; the mixed formulation's velocity subspace
+        for its bcs)."""
         space = self.V if space is None else space
         return dolfinx.fem.locate_dofs_topological(space.sub(component), self.mesh.topology.dim - 1,
                                                    self.role_facets(role))

@@ -30,7 +30,8 @@ from forming_fenicsx.fem.secant_state import SecantState
 
 @dataclass
 class SplitForm:
-    """A scalar or linear form (``ufl``) compiled as the parts whose sum it is (see ``split_form``)."""
+    """A scalar or linear form (``ufl``) compiled as the parts whose sum it is (see
+    ``split_form``)."""
 
     ufl: ufl.Form
     parts: list[dolfinx.fem.Form]
@@ -55,13 +56,13 @@ class SplitForm:
 
 
 def split_form(form: ufl.Form, apart_degree: int | None) -> SplitForm:
-    """The form compiled as one, or with its integrals of quadrature degree ``apart_degree`` compiled
-    apart from the others.
+    """The form compiled as one, or with its integrals of quadrature degree ``apart_degree``
+    compiled apart from the others.
 
     FFCx (the 0.5 of Debian 12 and the 0.9 of Debian 13) miscomputes a scalar or linear form that
     integrates a coefficient's derivatives with a one-point rule beside another rule: the form
-    sum(tau(u):e(v) dx + (1/d) div u div v dx_1) differs from its two terms assembled apart by 2 to 5 %
-    of their size (tests/test_forms.py). This is the reduced penalty term of Q1. Such a form is
+    sum(tau(u):e(v) dx + (1/d) div u div v dx_1) differs from its two terms assembled apart by 2 to
+    5 % of their size (tests/test_forms.py). This is the reduced penalty term of Q1. Such a form is
     compiled in parts, whose assembled values add up to the form's."""
     if apart_degree is None:
         return SplitForm(form, [dolfinx.fem.form(form)])
@@ -74,7 +75,8 @@ class FlowProblem:
     """One scene's flow problem, made of its parts: the coordinate system, the fields and boundary
     conditions (fields.py), the measures (measures.py), the secant state u_n (secant_state.py), the
     contact multiplier (contact.py) and the frozen coefficients (frozen.py: the friction bound, from
-    ``friction_state``, u_{0,m} in (3.33) and u_n in (3.13)); it builds the forms of (3.5)-(3.12)."""
+    ``friction_state``, u_{0,m} in (3.33) and u_n in (3.13)); it builds the forms of
+    (3.5)-(3.12)."""
 
     def __init__(self, scene: Scene, forming_mesh: FormingMesh):
         self.scene = scene
@@ -88,7 +90,8 @@ class FlowProblem:
         self.mixed = disc.formulation == "mixed"
         self.fields = FlowFields(mesh, self.facet_tags, self.constraints, disc.degree, self.mixed)
         self.V, self.system_space = self.fields.V, self.fields.system_space
-        self.u, self.solution, self.pressure = self.fields.u, self.fields.solution, self.fields.pressure
+        self.u, self.solution, self.pressure = (self.fields.u, self.fields.solution,
+                                                self.fields.pressure)
         self.bcs = self.fields.bcs
         reduced = disc.volumetric_integration == "reduced" and not self.mixed
         self.measures = Measures(mesh, self.facet_tags, self.coordinates, disc.degree, reduced)
@@ -193,11 +196,13 @@ class FlowProblem:
         return 1.0 / self.scene.penalty.d * self.divergence(u) * self.divergence(v) * self.dx_vol
 
     def hydrostatic_stress(self):
-        """sigma_H: div(u)/d of the penalty (3.4), or minus the pressure of the mixed formulation."""
+        """sigma_H: div(u)/d of the penalty (3.4), or minus the pressure of the mixed
+        formulation."""
         return -self.pressure if self.mixed else self.divergence(self.u) / self.scene.penalty.d
 
     def stress(self):
-        """Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4) (with its hoop part when axisymmetric)."""
+        """Cauchy stress s + sigma_H I with s = 2/3 G e' (2.4) (with its hoop part when
+        axisymmetric)."""
         c = self.coordinates
         deviator = 2.0 / 3.0 * self.secant_coefficient() * c.deviatoric(self.strain_rate(self.u))
         return deviator + self.hydrostatic_stress() * c.identity
@@ -249,7 +254,8 @@ class FlowProblem:
         return self.friction_normal_stress()
 
     def friction_bound(self):
-        """tau_f at the friction state: Coulomb's mu sigma_N-bar or the factor law's m k (friction.py)."""
+        """tau_f at the friction state: Coulomb's mu sigma_N-bar or the factor law's m k
+        (friction.py)."""
         law = self.scene.friction
         if law.law == "factor":
             return friction.factor_bound(law.m, self.flow_stress(self.friction_state.state))
@@ -261,7 +267,8 @@ class FlowProblem:
                                          self.scene.friction.d_T)
 
     def _bilinear(self, u, v):
-        """b(w; u, v) of (3.5); the mixed formulation adds its pressure terms instead of the penalty."""
+        """b(w; u, v) of (3.5); the mixed formulation adds its pressure terms instead of the
+        penalty."""
         form = self.viscous_form(u, v)
         if not self.mixed:
             form += self.volumetric_form(u, v)
@@ -269,12 +276,14 @@ class FlowProblem:
             form += contact.contact_form(u, v, self.contact_active(self.u_state), self.n,
                                          self.scene.penalty.d_N, self.ds_contact)
         if self.has_friction:
-            form += friction.friction_form(u, v, self.friction_coefficient(), self.n, self.ds_contact)
+            form += friction.friction_form(u, v, self.friction_coefficient(), self.n,
+                                           self.ds_contact)
         return form
 
     def _linear(self, v):
         """The right-hand side of the secant systems: f(v) = int_G5 F_N v_N of (3.2), minus the
-        augmented contact's int lambda v_N over the state's active set; None when there is neither."""
+        augmented contact's int lambda v_N over the state's active set; None when there is
+        neither."""
         form = self.load(v) if self.has_force else None
         if self.multiplier is not None:
             pressure = contact.multiplier_form(v, self.contact_active(self.u_state),
@@ -300,8 +309,8 @@ class FlowProblem:
         self.state.set_uniform(rate)
 
     def update_state(self, u: dolfinx.fem.Function, frozen_too: bool) -> None:
-        """Take G, the contact set and the slip regularisation from u (and the frozen coefficients too
-        if asked)."""
+        """Take G, the contact set and the slip regularisation from u (and the frozen coefficients
+        too if asked)."""
         self.state.update(u)
         if frozen_too:
             self.freeze(u)

@@ -1,6 +1,7 @@
 """Frozen coefficients: fields the flow's forms read at a state the iteration updates on its own
 schedule (the outer loop of the modified method (3.33), every iterate of the direct method (3.13),
-every Newton step). The friction bound tau_f is one; a strain or temperature field joins the same way.
+every Newton step). The friction bound tau_f is one; a strain or temperature field joins the same
+way.
 
 Protocol: ``freeze(u)`` takes the coefficient from the velocity u (a relaxed or accelerated step
 for a coupled field); ``settle(u)`` takes it at u itself; ``change(u)`` is the relative change

@@ -26,7 +26,8 @@ class Measures:
                  reduced_volumetric: bool):
         self.full_degree = quadrature_degree(element_degree, reduced=False)
         self.volumetric_degree = quadrature_degree(element_degree, reduced_volumetric)
-        self.dx = coordinates.measure(ufl.dx(domain=mesh, metadata={"quadrature_degree": self.full_degree}))
+        self.dx = coordinates.measure(
+            ufl.dx(domain=mesh, metadata={"quadrature_degree": self.full_degree}))
         self.dx_vol = coordinates.measure(
             ufl.dx(domain=mesh, metadata={"quadrature_degree": self.volumetric_degree}))
         self.apart_degree = (self.volumetric_degree if self.volumetric_degree != self.full_degree

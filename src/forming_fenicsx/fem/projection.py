@@ -17,8 +17,8 @@ from petsc4py import PETSc
 from forming_fenicsx.core.compat import function_space, petsc_vec
 from forming_fenicsx.fem.linear_problem import LinearProblem
 
-# CG with Jacobi to 1e-12 on a block-diagonal mass matrix: 9 iterations and 0.03 s against 0.34 s
-# for MUMPS LU on the steel wire's 4-component DQ2 of streamlines.py (6000 cells)
+# CG with Jacobi to 1e-12 on a block-diagonal mass matrix: a few iterations, about a tenth of
+# MUMPS LU's time on the projection of streamlines.py (docs/hardening.md)
 ELEMENTWISE = {"ksp_type": "cg", "pc_type": "jacobi", "ksp_rtol": 1e-12, "ksp_atol": 0.0,
                "ksp_max_it": 500}
 

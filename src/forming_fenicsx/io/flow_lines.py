@@ -7,8 +7,8 @@ import numpy as np
 from forming_fenicsx.post.streamlines import rk4_step
 
 FLOW_LINES = 10  # flow lines from the centres of as many equal bands across the entry section
-PER_BAND = 8  # material points per band on each time line to start with (even: a band's centre
-#               is one)
+# material points per band on each time line to start with (even: a band's centre is one)
+PER_BAND = 8
 MAX_GAP = 0.5  # band widths between neighbouring points of a time line before seeds are added
 REFINEMENTS = 6  # rounds of added seeds (each halves the spacing where the points drift apart)
 MAX_SEEDS = 4000

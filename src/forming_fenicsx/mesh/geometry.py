@@ -1,7 +1,7 @@
 """Gmsh scripts for the half models of Fig. 1, built from structured quadrilateral blocks (Fig. 2).
 
-Boundary roles are physical groups named as in section 2 (roles.py); a user's .msh file is checked by
-msh.py.
+Boundary roles are physical groups named as in section 2 (roles.py); a user's .msh file is checked
+by config/mesh_file.py.
 """
 from __future__ import annotations
 
@@ -32,7 +32,8 @@ class Constraint:
 
 @dataclass
 class FormingMesh:
-    """A dolfinx mesh with its facet tags (values from ROLES), the roles present and the constraints."""
+    """A dolfinx mesh with its facet tags (values from ROLES), the roles present and the
+    constraints."""
 
     mesh: object
     facet_tags: object
@@ -95,7 +96,8 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
 
 
 def _extrusion(scene: Scene) -> None:
-    """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at (xd, h1)."""
+    """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at
+    (xd, h1)."""
     g, disc = scene.geometry, scene.discretisation
     h0, h1, xd, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.die_position, g.length
     size, grade = disc.mesh_size, disc.corner_grading
@@ -106,9 +108,11 @@ def _extrusion(scene: Scene) -> None:
     points = {"p1": (0, 0), "p2": (xd, 0), "p3": (L, 0), "p4": (L, h1),
               "p5": (xd, h1), "p6": (xd, h0), "p7": (0, h0), "p8": (0, h1)}
     edges = {
-        "bottom_container": Edge("p1", "p2", n_xc, r_xc), "bottom_exit": Edge("p2", "p3", n_xe, r_xe),
+        "bottom_container": Edge("p1", "p2", n_xc, r_xc),
+        "bottom_exit": Edge("p2", "p3", n_xe, r_xe),
         "exit_face": Edge("p3", "p4", n_y1, r_y1), "exit_surface": Edge("p5", "p4", n_xe, r_xe),
-        "inner_vertical": Edge("p2", "p5", n_y1, r_y1), "inner_horizontal": Edge("p8", "p5", n_xc, r_xc),
+        "inner_vertical": Edge("p2", "p5", n_y1, r_y1),
+        "inner_horizontal": Edge("p8", "p5", n_xc, r_xc),
         "die_face": Edge("p5", "p6", n_y2, r_y2), "container_wall": Edge("p7", "p6", n_xc, r_xc),
         "ram_lower": Edge("p1", "p8", n_y1, r_y1), "ram_upper": Edge("p8", "p7", n_y2, r_y2),
     }
@@ -125,7 +129,8 @@ def _extrusion(scene: Scene) -> None:
 def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
     """Gamma1 on the driven end face (entry for "push", exit for "pull"); the other end carries F_N
     (Gamma5) when the scene gives one, else it is free (Gamma2 upstream, Gamma4 downstream)."""
-    driven, other, free = (entry, exit, "gamma4_free") if scene.process.drive == "push" else (exit, entry, "gamma2_free")
+    driven, other, free = ((entry, exit, "gamma4_free") if scene.process.drive == "push"
+                           else (exit, entry, "gamma2_free"))
     loaded = "gamma5_force" if scene.process.applied_force is not None else free
     return {"gamma1_velocity": list(driven), loaded: list(other)}
 
@@ -189,9 +194,9 @@ def _generate(scene: Scene) -> None:
 
 @contextmanager
 def _one_scotch_thread():
-    """SCOTCH, dolfinx's partitioner, on one thread per rank (Scotch 7 reads SCOTCH_PTHREAD_NUMBER at
-    each call): with its threads the partition changes from run to run, and with it the dof numbering
-    and MUMPS' ordering on several ranks. The variable is restored afterwards."""
+    """SCOTCH, dolfinx's partitioner, on one thread per rank (Scotch 7 reads SCOTCH_PTHREAD_NUMBER
+    at each call): with its threads the partition changes from run to run, and with it the dof
+    numbering and MUMPS' ordering on several ranks. The variable is restored afterwards."""
     previous = os.environ.get("SCOTCH_PTHREAD_NUMBER")
     os.environ["SCOTCH_PTHREAD_NUMBER"] = "1"
     try:
@@ -204,9 +209,10 @@ def _one_scotch_thread():
 
 
 def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
-    """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order = element),
-    or read the scene's own .msh file (geometry.mesh_file, checked when the scene was read). The
-    partition repeats from run to run (_one_scotch_thread); its ghosts are compat.GHOST_MODE's."""
+    """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order =
+    element), or read the scene's own .msh file (geometry.mesh_file, checked when the scene was
+    read). The partition repeats from run to run (_one_scotch_thread); its ghosts are
+    compat.GHOST_MODE's."""
     from dolfinx.mesh import meshtags
 
     from forming_fenicsx.core.compat import mesh_from_gmsh
@@ -233,7 +239,8 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
     present = set().union(*comm.allgather(present))
     roles = {name: tag for name, tag in ROLES.items() if tag in present}
     # Gamma1 and Gamma6 are normal to x and y in both processes: u_x = u_N^0 and u_y = 0.
-    constraints = [Constraint("gamma1_velocity", 0, scene.process.velocity), Constraint("gamma6_symmetry", 1, 0.0)]
+    constraints = [Constraint("gamma1_velocity", 0, scene.process.velocity),
+                   Constraint("gamma6_symmetry", 1, 0.0)]
     return FormingMesh(mesh, facet_tags, roles, constraints)
 
 
@@ -248,8 +255,8 @@ def write_msh(scene: Scene, path: str | Path) -> Path:
 
 
 def _chain_coordinate(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Arc length along a polyline of nodes, walked from the upstream end (smallest x, then largest y)
-    to the nearest node not yet visited."""
+    """Arc length along a polyline of nodes, walked from the upstream end (smallest x, then
+    largest y) to the nearest node not yet visited."""
     points = np.column_stack([x, y])
     current = int(np.lexsort((-y, x))[0])
     s = np.zeros(len(points))

@@ -1,12 +1,12 @@
 """Unilateral contact on Gamma3: the penalty (3.4), sigma_N = -u_N^+/d_N, optionally augmented.
 
-Augmented (penalty.augmented, the default): sigma_N = -(lambda + u_N/d_N)^+ with a multiplier lambda >= 0
-updated by lambda <- (lambda + u_N/d_N)^+ once the iterate has nearly settled (Uzawa's method for the
-augmented Lagrangian, ContactMultiplier). At its fixed point lambda > 0 where u_N = 0 and u_N <= 0 where lambda = 0: the unilateral
-condition (2.9) holds exactly, and d_N only sets how fast lambda converges. The pure penalty (the
-paper's) lets the workpiece into the die at u_N = d_N sigma_N, which in a confined rigid zone (the
-container of an extrusion) compresses it at a spurious rate and shifts the wall pressure by a spurious
-stress (docs/penalties.md).
+Augmented (penalty.augmented, the default): sigma_N = -(lambda + u_N/d_N)^+ with a multiplier
+lambda >= 0 updated by lambda <- (lambda + u_N/d_N)^+ once the iterate has nearly settled (Uzawa's
+method for the augmented Lagrangian, ContactMultiplier). At its fixed point lambda > 0 where
+u_N = 0 and u_N <= 0 where lambda = 0: the unilateral condition (2.9) holds exactly, and d_N only
+sets how fast lambda converges. The pure penalty (the paper's) lets the workpiece into the die at
+u_N = d_N sigma_N, which in a confined rigid zone (the container of an extrusion) compresses it at
+a spurious rate and shifts the wall pressure by a spurious stress (docs/penalties.md).
 """
 from __future__ import annotations
 
@@ -19,7 +19,8 @@ def normal_velocity(u, n):
 
 
 def active_indicator(u_state, n, d_N: float, multiplier=0.0):
-    """1 where the state touches or penetrates the die (lambda d_N + u_N >= 0), else 0: the active set."""
+    """1 where the state touches or penetrates the die (lambda d_N + u_N >= 0), else 0: the active
+    set."""
     return ufl.conditional(ufl.ge(multiplier * d_N + normal_velocity(u_state, n), 0.0), 1.0, 0.0)
 
 
@@ -35,7 +36,8 @@ def contact_form(u, v, active, n, d_N: float, ds_contact):
 
 
 def multiplier_form(v, active, multiplier, n, ds_contact):
-    """int lambda v_N over the active set: the multiplier's part of the contact traction, a linear form."""
+    """int lambda v_N over the active set: the multiplier's part of the contact traction, a linear
+    form."""
     return active * multiplier * normal_velocity(v, n) * ds_contact
 
 

@@ -6,8 +6,8 @@ measure weight from here, so that no other module knows which of the two it is.
 
 Plane strain: e(u) = sym(grad u) (2x2; the out-of-plane rate is zero and counts in the deviator),
 integrals per unit width of the half model (``whole`` makes them the strip's).
-Axisymmetric: e(u) = [[du_x/dx, sym, 0], [sym, du_y/dy, 0], [0, 0, u_y/y]] with the hoop rate u_y/y,
-integrals over the whole body: the measure carries the weight 2 pi y.
+Axisymmetric: e(u) = [[du_x/dx, sym, 0], [sym, du_y/dy, 0], [0, 0, u_y/y]] with the hoop rate
+u_y/y, integrals over the whole body: the measure carries the weight 2 pi y.
 """
 from __future__ import annotations
 
@@ -42,8 +42,8 @@ class WeightedMeasure:
 
 
 class CoordinateSystem:
-    """Kinematics and measure weight of plane strain or an axisymmetric body (section 2 of the paper,
-    with the hoop components of a body of revolution)."""
+    """Kinematics and measure weight of plane strain or an axisymmetric body (section 2 of the
+    paper, with the hoop components of a body of revolution)."""
 
     def __init__(self, mesh, symmetry: str = "plane_strain"):
         if symmetry not in SYMMETRIES:
@@ -59,7 +59,8 @@ class CoordinateSystem:
         e = ufl.sym(ufl.grad(u))
         if not self.axisymmetric:
             return e
-        return ufl.as_matrix([[e[0, 0], e[0, 1], 0], [e[1, 0], e[1, 1], 0], [0, 0, u[1] / self.radius]])
+        return ufl.as_matrix([[e[0, 0], e[0, 1], 0], [e[1, 0], e[1, 1], 0],
+                              [0, 0, u[1] / self.radius]])
 
     def divergence(self, u):
         """div u = tr e(u) (volume change rate; with u_y/y when axisymmetric)."""
@@ -107,8 +108,8 @@ class CoordinateSystem:
         return 1.0 if self.axisymmetric else 2.0
 
     def section(self, half_thickness: float) -> float:
-        """Area the process force acts on at a section of the given half-thickness (radius): the half
-        thickness per unit width, or pi R^2."""
+        """Area the process force acts on at a section of the given half-thickness (radius): the
+        half thickness per unit width, or pi R^2."""
         return math.pi * half_thickness**2 if self.axisymmetric else half_thickness
 
     @property
@@ -117,7 +118,8 @@ class CoordinateSystem:
 
     @property
     def separation_weight(self):
-        """Weight on the y-traction on the die whose integral is the die separation force: the force
-        on one die half per unit width, or (axisymmetric) the force that splits a die into two halves
-        across a diametral plane, int_0^pi sin(theta) dtheta y t_y = 2 y t_y per unit arc length."""
+        """Weight on the y-traction on the die whose integral is the die separation force: the
+        force on one die half per unit width, or (axisymmetric) the force that splits a die into two
+        halves across a diametral plane, int_0^pi sin(theta) dtheta y t_y = 2 y t_y per unit arc
+        length."""
         return 2.0 * self.radius if self.axisymmetric else 1.0

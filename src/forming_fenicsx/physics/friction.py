@@ -1,11 +1,10 @@
-"""Friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11): Coulomb's law of the paper, or the
-friction factor law (the "shear friction" of bulk-forming codes, Chen and Kobayashi).
+"""Friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11): Coulomb's law of the paper, or
+the friction factor law (the "shear friction" of bulk-forming codes, Chen and Kobayashi).
 
-The bound tau_f(w) is Coulomb's mu sigma_N-bar (2.9), or m k with k = sigma_p(rate)/sqrt(3) the shear
-flow stress of the workpiece where it slides. j_dT(w, v) = int tau_f(w) sqrt(|v_T|^2 + d_T^2), with
-Gateaux derivative
-tau_f(w) v_T / sqrt(|v_T|^2 + d_T^2); the secant-modulus methods linearise it with the slip
-coefficient tau_f / sqrt(|u_n,T|^2 + d_T^2) of the current state.
+The bound tau_f(w) is Coulomb's mu sigma_N-bar (2.9), or m k with k = sigma_p(rate)/sqrt(3) the
+shear flow stress of the workpiece where it slides. j_dT(w, v) = int tau_f(w) sqrt(|v_T|^2 + d_T^2),
+with Gateaux derivative tau_f(w) v_T / sqrt(|v_T|^2 + d_T^2); the secant-modulus methods linearise
+it with the slip coefficient tau_f / sqrt(|u_n,T|^2 + d_T^2) of the current state.
 """
 from __future__ import annotations
 
@@ -50,17 +49,17 @@ def regularised_functional(tau_f, u, n, d_T: float):
 
 
 def newton_form(du, v, u, tau_f, n, d_T: float, slow_slip: float, ds_contact):
-    """Friction's part of Newton's operator at u (tau_f fixed): the secant form of (3.13) where the die
-    point slips slower than ``slow_slip`` or sticks, the tangent of (3.11) where it slips faster. Near
-    zero slip the tangent's curvature is about tau_f/d_T, which made Newton's line search cut the steps
-    (docs/solvers.md); in fast slip the tangent keeps the steps quadratic."""
+    """Friction's part of Newton's operator at u (tau_f fixed): the secant form of (3.13) where the
+    die point slips slower than ``slow_slip`` or sticks, the tangent of (3.11) where it slips
+    faster. Near zero slip the tangent's curvature is about tau_f/d_T, which made Newton's line
+    search cut the steps (docs/solvers.md); in fast slip the tangent keeps the steps quadratic."""
     slip = tangential(u, n)
     coefficient = slip_coefficient(tau_f, u, n, d_T)
     fast = ufl.conditional(ufl.gt(ufl.dot(slip, slip), slow_slip**2), 1.0, 0.0)
     du_T, v_T = tangential(du, n), tangential(v, n)
     return (friction_form(du, v, coefficient, n, ds_contact)
-            - fast * coefficient * ufl.dot(slip, du_T) * ufl.dot(slip, v_T) / (ufl.dot(slip, slip) + d_T**2)
-            * ds_contact)
+            - fast * coefficient * ufl.dot(slip, du_T) * ufl.dot(slip, v_T)
+            / (ufl.dot(slip, slip) + d_T**2) * ds_contact)
 
 
 def friction_traction(coefficient, u_state, n):

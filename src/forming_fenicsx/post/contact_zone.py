@@ -4,10 +4,10 @@ The penalty contact pressure (lambda + u_N/d_N)^+ is read at the quadrature poin
 facets. Where the die wall turns at a facet's end (a CSV polyline, a user's mesh), the continuous
 velocity cannot be tangent to both facets, so u_N changes sign within each facet and the pressure
 is zero at some of its quadrature points although the facet and its neighbours press on the die
-(the contact "flickers"). Counting only the quadrature points made the contact zone of a
-24-segment cosine die 40 % short and its mean pressure 57 % high. Here the facets inside a zone
-count whole, and so do its end facets when the zone flickers (whole_facets); a die whose contact
-points do not flicker (a straight wall) gets the quadrature points' measure, as before.
+(the contact "flickers"), and counting only the quadrature points makes the zone short and its
+mean pressure high (docs/outputs.md). Here the facets inside a zone count whole, and so do its end
+facets when the zone flickers (whole_facets); a die whose contact points do not flicker (a
+straight wall) gets the quadrature points' measure.
 """
 from __future__ import annotations
 

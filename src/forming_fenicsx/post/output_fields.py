@@ -37,10 +37,10 @@ def output_fields(problem: FlowProblem) -> list[dolfinx.fem.Function]:
 
     Scalars are nodal means (lumped projections) on Lagrange elements of the geometry degree, the
     form XDMF and ParaView read. Q2's basis functions change sign, so the nodal mean
-    (f, phi_i)/(1, phi_i) of a non-negative f can be negative where f varies steeply (-4e-3 of the
-    equivalent strain rate was seen): the non-negative fields (NON_NEGATIVE_FIELDS) are clipped,
-    max(value, FLOOR max|value|), node by node (the projection is not positivity-preserving; the
-    clip is). Without the floor, the writer's rounding left -3e-12 of a largest 2e3 in the file.
+    (f, phi_i)/(1, phi_i) of a non-negative f can be negative where f varies steeply: the
+    non-negative fields (NON_NEGATIVE_FIELDS) are clipped, max(value, FLOOR max|value|), node by
+    node (the projection is not positivity-preserving; the clip is), the floor above the writer's
+    rounding (docs/outputs.md).
     """
     space = function_space(problem.mesh, "P", geometry_degree(problem.mesh))
     sources = {

@@ -39,15 +39,13 @@ if TYPE_CHECKING:
     from forming_fenicsx.fem.forms import FlowProblem
 
 # Steps of a quarter cell; where a step gains less than STEP_STRAIN (the rigid stock and product)
-# up to LONGEST cells, retaken at a quarter cell if it gained more. On the steel wire (h 0.06 mm,
-# docs/hardening.md) a quarter and a sixteenth of a cell gave exit strains 1e-3 apart, steps up to
-# 2 cells 4e-4 apart from quarter cells alone in 178 steps against 677 (up to 4 cells: 5e-3);
-# written profiles of an eighth and a quarter of a cell 5e-4 (h 0.06) and 7e-4 (h 0.1) apart
+# up to LONGEST cells, retaken at a quarter cell if it gained more: a quarter of the steps for an
+# exit strain 4e-4 from quarter cells alone (the steel wire; docs/hardening.md)
 STEPS_PER_CELL = 4
 STEP_STRAIN = 1e-4
 LONGEST = 2.0
-# the projection's Gauss degree over 2 p: the surface strain of the steel wire rose by 0.005 from
-# degree 2 p + 1 (the flow's rule) to 2 p + 4
+# the projection's Gauss degree over 2 p: the flow's own rule (2 p + 1) leaves the surface strain
+# lower (docs/hardening.md)
 RULE_ABOVE = 4
 
 

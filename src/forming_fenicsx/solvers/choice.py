@@ -12,7 +12,7 @@ def solver_for(problem: FlowProblem, petsc_options: dict[str, Any] | None = None
                balance: Callable[[], float] | None = None,
                stop: Callable[[], str | None] | None = None) -> SecantSolver:
     """Newton's method after secant_start direct iterates (newton.py) for solver.method "newton",
-    else the secant-modulus iteration, direct (3.13) or modified (3.33) (solvers.py); ``balance``
+    else the secant-modulus iteration, direct (3.13) or modified (3.33) (secant.py); ``balance``
     and ``stop`` as SecantSolver takes them."""
     method = NewtonSolver if problem.scene.solver.method == "newton" else SecantSolver
     return method(problem, petsc_options, balance=balance, stop=stop)

@@ -46,8 +46,8 @@ log = logging.getLogger(__package__)  # the solvers' one logger (app/cli.py sets
 
 ROUNDING = 1e-12    # a relative Newton step below this is rounding
 # with the strain in the tangent a run stops only once the x forces balance to this (unless
-# solver.force_tolerance is set): switched to the tangent at 3e-2 of the strain gained, Dieter's
-# scene met delta with the forces 124 % out of balance (docs/hardening.md)
+# solver.force_tolerance is set): the increment can meet delta while the penalty pressure is still
+# far out of balance (docs/hardening.md)
 COUPLED_BALANCE = 1e-3
 # Newton's stops after which the direct method goes on (not a stop request, nor ill-conditioned
 # systems, which the direct method's would share)
@@ -152,8 +152,7 @@ class NewtonSolver(SecantSolver):
         if forms.dual_recap is not None:
             # a strain or temperature just frozen can lower the flow stress below the dual's
             # |tau_h|; capped again, the operator stays positive definite and -du a descent
-            # direction of Phi (without it, F.du < 0 stopped the line search at 2^-12 on a
-            # plane-strain strip hardening from zero strain, docs/hardening.md)
+            # direction of Phi, which the line search needs (docs/hardening.md)
             set_at_quadrature_points(forms.dual, forms.dual_recap)
         residual = self.assemble_residual().norm()
         self.assemble_operator()
@@ -253,8 +252,7 @@ class NewtonSolver(SecantSolver):
     def _coupled_in_tangent(self) -> bool:
         """Whether the step carries the strain's derivative (strain_tangent.py): it is then not
         a Newton step for Phi at the frozen strain, whose minimum along it lies further (lengthened
-        to it, the step undid the strain's share: the plane-strain wedge crept by a factor 0.9 a
-        step and did not converge)."""
+        to it, the step undoes the strain's share and the iteration crawls; docs/hardening.md)."""
         return self.coupled_tangent is not None and self.coupled_tangent.field.in_tangent
 
     def _refine(self, energies: dict[float, float], current: float) -> float:

@@ -20,7 +20,8 @@ from mpi4py import MPI
 
 from forming_fenicsx.core.compat import GHOST_MODE, colliding_cells, function_space
 from forming_fenicsx.physics.coordinates import CoordinateSystem
-from forming_fenicsx.coupled.thermal import FrictionHeat, HeatExchange, TemperatureField, ThermalMaterial
+from forming_fenicsx.coupled.thermal import (FrictionHeat, HeatExchange, TemperatureField,
+                                             ThermalMaterial)
 
 LEFT, RIGHT, BOTTOM, TOP = 1, 2, 3, 4
 
@@ -167,7 +168,8 @@ def adiabatic(symmetry: str, degree: int, cells: int, softening: float | None = 
     exact rise, the freezes and the heat balance (without softening, the global one too: the
     drawing power W times the throughput against the heat carried out and the work stored)."""
     from forming_fenicsx.core.roles import ROLES
-    from forming_fenicsx.verification.verification import RADIAL, radial_stress_rise, radial_velocity, sector_mesh
+    from forming_fenicsx.verification.verification import (RADIAL, radial_stress_rise,
+                                                            radial_velocity, sector_mesh)
 
     forming_mesh = sector_mesh(cells, degree, comm)
     mesh = forming_mesh.mesh

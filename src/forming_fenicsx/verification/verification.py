@@ -1,7 +1,7 @@
 """Problems with exact solutions (verification.md), solved with the production forms and solver.
 
-Power-law channel (Poiseuille) flow: between walls at y = +-h, driven by a pressure gradient G (a body
-force here), u(y) = n/(n+1) (G/K)^(1/n) [h^(1+1/n) - |y|^(1+1/n)] with K = (A/sqrt3) 3^(-n/2).
+Power-law channel (Poiseuille) flow: between walls at y = +-h, driven by a pressure gradient G (a
+body force here), u(y) = n/(n+1) (G/K)^(1/n) [h^(1+1/n) - |y|^(1+1/n)] with K = (A/sqrt3) 3^(-n/2).
 """
 from __future__ import annotations
 
@@ -25,16 +25,20 @@ LENGTH, HALF_HEIGHT, GRADIENT, A = 2.0, 1.0, 1.0, 1.0
 
 
 def channel_velocity(n: float, y):
-    """The exact channel-flow velocity u_x(y) for the power law sigma_p = A rate^n (numpy or UFL)."""
+    """The exact channel-flow velocity u_x(y) for the power law sigma_p = A rate^n (numpy or
+    UFL)."""
     K = A / 3**0.5 * 3 ** (-n / 2)
-    return n / (n + 1) * (GRADIENT / K) ** (1 / n) * (HALF_HEIGHT ** (1 + 1 / n) - abs(y) ** (1 + 1 / n))
+    return (n / (n + 1) * (GRADIENT / K) ** (1 / n)
+            * (HALF_HEIGHT ** (1 + 1 / n) - abs(y) ** (1 + 1 / n)))
 
 
 def channel_errors(n: float, element: str, averaging: str, cells: int,
                    comm: MPI.Comm = MPI.COMM_WORLD) -> tuple[float, float]:
-    """L2 and H1-seminorm velocity errors on the half channel [0, 2] x [0, 1] with 2 cells x cells elements:
-    exact velocity on the wall and the ends, symmetry at y = 0, the pressure gradient as a body force."""
-    mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([LENGTH, HALF_HEIGHT])],
+    """L2 and H1-seminorm velocity errors on the half channel [0, 2] x [0, 1] with 2 cells x cells
+    elements: exact velocity on the wall and the ends, symmetry at y = 0, the pressure gradient as
+    a body force."""
+    mesh = dolfinx.mesh.create_rectangle(comm,
+                                         [np.array([0.0, 0.0]), np.array([LENGTH, HALF_HEIGHT])],
                                          [2 * cells, cells], dolfinx.mesh.CellType.quadrilateral,
                                          ghost_mode=GHOST_MODE)
     mesh.topology.create_connectivity(1, 2)
@@ -42,39 +46,47 @@ def channel_errors(n: float, element: str, averaging: str, cells: int,
         "process": {"kind": "extrusion"}, "output": {"fields": False, "figures": False},
         "material": {"law": "rate_power", "A": A, "n": n, "rate_floor": 1e-10},
         "discretisation": {"element": element, "averaging": averaging}, "penalty": {"d": 1e-7},
-        "solver": {"method": "direct", "tolerance": 1e-8, "max_iterations": 500, "reference_strain_rate": 1.0}})
+        "solver": {"method": "direct", "tolerance": 1e-8, "max_iterations": 500,
+                   "reference_strain_rate": 1.0}})
     none = np.array([], dtype=np.int32)
-    problem = FlowProblem(scene, FormingMesh(mesh, dolfinx.mesh.meshtags(mesh, 1, none, none), {}, []))
+    problem = FlowProblem(scene, FormingMesh(mesh, dolfinx.mesh.meshtags(mesh, 1, none, none),
+                                             {}, []))
     wall_velocity = dolfinx.fem.Function(problem.V)
     wall_velocity.interpolate(lambda x: np.vstack([channel_velocity(n, x[1]), 0 * x[0]]))
     walls = dolfinx.mesh.locate_entities_boundary(
-        mesh, 1, lambda x: np.isclose(x[1], HALF_HEIGHT) | np.isclose(x[0], 0) | np.isclose(x[0], LENGTH))
+        mesh, 1, lambda x: (np.isclose(x[1], HALF_HEIGHT) | np.isclose(x[0], 0)
+                            | np.isclose(x[0], LENGTH)))
     axis = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda x: np.isclose(x[1], 0))
-    problem.bcs = [dolfinx.fem.dirichletbc(wall_velocity, dolfinx.fem.locate_dofs_topological(problem.V, 1, walls)),
-                   dolfinx.fem.dirichletbc(PETSc.ScalarType(0), dolfinx.fem.locate_dofs_topological(
-                       problem.V.sub(1), 1, axis), problem.V.sub(1))]
+    problem.bcs = [
+        dolfinx.fem.dirichletbc(wall_velocity,
+                                dolfinx.fem.locate_dofs_topological(problem.V, 1, walls)),
+        dolfinx.fem.dirichletbc(PETSc.ScalarType(0), dolfinx.fem.locate_dofs_topological(
+            problem.V.sub(1), 1, axis), problem.V.sub(1))]
     problem.L = dolfinx.fem.form(GRADIENT * ufl.TestFunction(problem.V)[0] * ufl.dx)
     if not SecantSolver(problem).solve().converged:
-        raise RuntimeError(f"channel flow n = {n}, {element}, {averaging}, {cells} cells did not converge")
+        raise RuntimeError(f"channel flow n = {n}, {element}, {averaging}, {cells} cells "
+                           "did not converge")
     y = ufl.SpatialCoordinate(mesh)[1]
     error = problem.u - ufl.as_vector([channel_velocity(n, y), 0])
     dx = ufl.dx(metadata={"quadrature_degree": 10})
 
     def norm(integrand):
-        return float(np.sqrt(comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * dx)))))
+        return float(np.sqrt(comm.allreduce(
+            dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * dx)))))
     return norm(ufl.inner(error, error)), norm(ufl.inner(ufl.grad(error), ufl.grad(error)))
 
 
-def channel_orders(n: float, element: str, averaging: str, cells=(4, 8, 16)) -> tuple[np.ndarray, np.ndarray]:
+def channel_orders(n: float, element: str, averaging: str, cells=(4, 8, 16)
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """Errors (rows: meshes; columns: L2, H1) and the observed orders between successive meshes."""
     errors = np.array([channel_errors(n, element, averaging, c) for c in cells])
     return errors, np.log2(errors[:-1] / errors[1:])
 
 
 # -- radial flows through a smooth cone (axisymmetric) or wedge (plane strain) ---------------------
-# Section 1 of the round-products reference: v = -(U/rho^2) e_rho (cone) or -(U/r) e_r (wedge) toward
-# the apex, for any flow law; the workpiece between the caps rho1 < rho < rho0, frictionless wall at
-# theta = alpha. Apex at the origin, flow along +x: x = -rho cos(theta), y = rho sin(theta).
+# Section 1 of the round-products reference: v = -(U/rho^2) e_rho (cone) or -(U/r) e_r (wedge)
+# toward the apex, for any flow law; the workpiece between the caps rho1 < rho < rho0, frictionless
+# wall at theta = alpha. Apex at the origin, flow along +x: x = -rho cos(theta), y = rho sin(theta).
 RADIAL = {"alpha": 15.0, "rho1": 1.0, "rho0": 1.5, "U": 1.0, "K": 1.0}
 
 
@@ -84,7 +96,8 @@ def radial_power(symmetry: str) -> int:
 
 
 def radial_velocity(symmetry: str, x):
-    """The exact velocity -(U/rho^k) e_rho at the points x (UFL coordinates or a numpy (3, N) array)."""
+    """The exact velocity -(U/rho^k) e_rho at the points x (UFL coordinates or a numpy (3, N)
+    array)."""
     power, U = radial_power(symmetry), RADIAL["U"]
     rho = (x[0] ** 2 + x[1] ** 2) ** 0.5
     # e_rho = (x, y)/rho points away from the apex (upstream); the flow runs toward it
@@ -121,7 +134,8 @@ def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> For
             entry_cap = geo.addCircleArc(corners[3], centre, corners[0])
             surface = geo.addPlaneSurface([geo.addCurveLoop([axis, exit_cap, wall, entry_cap])])
             along = max(1, round(cells * (rho0 - rho1) / (rho1 * alpha)))
-            for curve, count in ((axis, along), (wall, along), (exit_cap, cells), (entry_cap, cells)):
+            for curve, count in ((axis, along), (wall, along), (exit_cap, cells),
+                                 (entry_cap, cells)):
                 geo.mesh.setTransfiniteCurve(curve, count + 1)
             geo.mesh.setTransfiniteSurface(surface)
             geo.mesh.setRecombine(2, surface)
@@ -166,8 +180,9 @@ def radial_problem(symmetry: str, n: float, element: str, cells: int, method: st
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": RADIAL["U"]},
         "output": {"fields": False, "figures": False},
-        "geometry": {"symmetry": symmetry, **({"entry_diameter": 2 * RADIAL["rho0"], "exit_diameter": 2}
-                                              if symmetry == "axisymmetric" else {})},
+        "geometry": {"symmetry": symmetry,
+                     **({"entry_diameter": 2 * RADIAL["rho0"], "exit_diameter": 2}
+                        if symmetry == "axisymmetric" else {})},
         "material": material or {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "averaging": "quadrature"},
         "penalty": {"d_relative": 1e-7, "d_N_relative": 1e-4},  # O(d) below Q2's error on 16 cells
@@ -179,7 +194,8 @@ def radial_problem(symmetry: str, n: float, element: str, cells: int, method: st
     exit_facets = problem.role_facets("gamma1_velocity")
     axis_dofs = problem.boundary_dofs("gamma6_symmetry", 1)
     problem.bcs[:] = [dolfinx.fem.dirichletbc(exit_velocity, dolfinx.fem.locate_dofs_topological(
-        problem.V, 1, exit_facets)), dolfinx.fem.dirichletbc(PETSc.ScalarType(0), axis_dofs, problem.V.sub(1))]
+        problem.V, 1, exit_facets)),
+        dolfinx.fem.dirichletbc(PETSc.ScalarType(0), axis_dofs, problem.V.sub(1))]
     return problem
 
 
@@ -200,21 +216,23 @@ def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str =
     result = solver.solve()
     solver.destroy()
     if not result.converged:
-        raise RuntimeError(f"radial flow {symmetry} n = {n} {element} {cells} cells: {result.reason}")
+        raise RuntimeError(f"radial flow {symmetry} n = {n} {element} {cells} cells: "
+                           f"{result.reason}")
     x = ufl.SpatialCoordinate(problem.mesh)
     exact = ufl.as_vector(radial_velocity(symmetry, x))
     error = problem.u - exact
     dx = problem.coordinates.measure(ufl.dx(domain=problem.mesh, metadata={"quadrature_degree": 8}))
 
     def norm(integrand):
-        return float(np.sqrt(comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * dx)))))
+        return float(np.sqrt(comm.allreduce(
+            dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * dx)))))
 
     alpha, rho1 = np.radians(RADIAL["alpha"]), RADIAL["rho1"]
     area = problem.coordinates.section(rho1 * np.sin(alpha))
     law = scene.material
     found = {"l2": norm(ufl.inner(error, error)) / norm(ufl.inner(exact, exact)),
-             "h1": norm(ufl.inner(ufl.grad(error), ufl.grad(error))) / norm(ufl.inner(ufl.grad(exact),
-                                                                                    ufl.grad(exact))),
+             "h1": (norm(ufl.inner(ufl.grad(error), ufl.grad(error)))
+                    / norm(ufl.inner(ufl.grad(exact), ufl.grad(exact)))),
              "exit_stress": reaction_on(problem, "gamma1_velocity", 0) / area,
              "exact_exit_stress": (radial_hardening_stress_rise(symmetry, law) if law.hardens
                                    else radial_stress_rise(symmetry, n)),
@@ -237,21 +255,26 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     from forming_fenicsx.post.forces import reaction
 
     rate, n, length = 0.5, 0.2, 2.0
-    mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([length, 1.0])], [6, 3],
-                                         dolfinx.mesh.CellType.quadrilateral, ghost_mode=GHOST_MODE)
+    mesh = dolfinx.mesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([length, 1.0])],
+                                         [6, 3], dolfinx.mesh.CellType.quadrilateral,
+                                         ghost_mode=GHOST_MODE)
     facets = {role: dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for role, where in (
-        ("gamma1_velocity", lambda x: np.isclose(x[0], length)), ("gamma2_free", lambda x: np.isclose(x[0], 0)),
-        ("gamma4_free", lambda x: np.isclose(x[1], 1.0)), ("gamma6_symmetry", lambda x: np.isclose(x[1], 0)))}
+        ("gamma1_velocity", lambda x: np.isclose(x[0], length)),
+        ("gamma2_free", lambda x: np.isclose(x[0], 0)),
+        ("gamma4_free", lambda x: np.isclose(x[1], 1.0)),
+        ("gamma6_symmetry", lambda x: np.isclose(x[1], 0)))}
     from forming_fenicsx.core.roles import ROLES
 
     indices = np.concatenate(list(facets.values()))
-    values = np.concatenate([np.full(len(f), ROLES[role], dtype=np.int32) for role, f in facets.items()])
+    values = np.concatenate([np.full(len(f), ROLES[role], dtype=np.int32)
+                             for role, f in facets.items()])
     order = np.argsort(indices)
     tags = dolfinx.mesh.meshtags(mesh, 1, indices[order].astype(np.int32), values[order])
-    constraints = [Constraint("gamma1_velocity", 0, rate * length), Constraint("gamma2_free", 0, 0.0),
-                   Constraint("gamma6_symmetry", 1, 0.0)]
+    constraints = [Constraint("gamma1_velocity", 0, rate * length),
+                   Constraint("gamma2_free", 0, 0.0), Constraint("gamma6_symmetry", 1, 0.0)]
     scene = scene_from_dict({
-        "process": {"kind": "drawing", "velocity": rate * length}, "output": {"fields": False, "figures": False},
+        "process": {"kind": "drawing", "velocity": rate * length},
+        "output": {"fields": False, "figures": False},
         "geometry": {"symmetry": "axisymmetric"},
         "material": {"law": "rate_power", "A": RADIAL["K"], "n": n},
         "discretisation": {"element": element, "formulation": formulation,
@@ -269,4 +292,5 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     exact = np.column_stack([rate * points[:, 0], -rate * points[:, 1] / 2])
     error = np.abs(problem.u.x.array.reshape(-1, 2) - exact).max() / rate
     return {"velocity_error": comm.allreduce(error, op=MPI.MAX),
-            "force_ratio": reaction(problem) / (np.pi * RADIAL["K"] * rate**n), "solves": result.linear_solves}
+            "force_ratio": reaction(problem) / (np.pi * RADIAL["K"] * rate**n),
+            "solves": result.linear_solves}

@@ -1,4 +1,5 @@
-"""A study's analysis: exact or Richardson references per design point, relative errors, the lines of a design study and their interior optima, the cheapest setting per error level."""
+"""A study's analysis: exact or Richardson references per design point, relative errors, the
+lines of a design study and their interior optima, the cheapest setting per error level."""
 from __future__ import annotations
 import itertools
 import json

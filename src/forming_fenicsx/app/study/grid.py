@@ -1,4 +1,5 @@
-"""`forming study`'s grid: the runs of one scene over the varied keys (a study file or --vary), each run's quantities and cost in study.json, resumed where it stopped."""
+"""`forming study`'s grid: the runs of one scene over the varied keys (a study file or --vary),
+each run's quantities and cost in study.json, resumed where it stopped."""
 from __future__ import annotations
 import itertools
 import json
@@ -15,7 +16,8 @@ from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.config.loader import (apply_overrides, parse_override, read_scene_data,
                                            scene_from_dict)
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.app.study.analysis import QUANTITIES, settings_key, exact_value, find_optima, has_reference, is_design_key, references, value
+from forming_fenicsx.app.study.analysis import (QUANTITIES, settings_key, exact_value, find_optima,
+                                                has_reference, is_design_key, references, value)
 from forming_fenicsx.app.study.report import write_csv, report
 
 

@@ -5,7 +5,8 @@ from pathlib import Path
 from typing import Any
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.core.units import Units
-from forming_fenicsx.app.study.analysis import cheapest, has_reference, is_design_key, relative_error, value
+from forming_fenicsx.app.study.analysis import (cheapest, has_reference, is_design_key,
+                                                relative_error, value)
 
 
 def _unit_label(units: Units, name: str, whole_forces: bool) -> str:
