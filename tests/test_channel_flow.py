@@ -1,6 +1,6 @@
-"""Power-law channel flow of verification.md: observed orders of the L2 and H1 velocity errors. The secant
-at quadrature points gives the optimal orders (Q1: 2 and 1, Q2: 3 and 2); averaging it at the nodes, as
-the paper does, limits Q2 to about first order in H1."""
+"""Power-law channel flow of verification.md: observed orders of the L2 and H1 velocity errors. The
+secant at quadrature points gives the optimal orders (Q1: 2 and 1, Q2: 3 and 2); averaging it at the
+nodes, as the paper does, limits Q2 to about first order in H1."""
 import pytest
 
 from forming_fenicsx.verification.verification import channel_orders

@@ -138,8 +138,9 @@ def test_csv_profile_refusals_name_the_key_and_row(tmp_path, rows, message):
     ({"second_angle": 95.0, "second_angle_length": 0.01}, "geometry.second_angle"),
 ])
 def test_profile_keys_are_checked(geometry, key):
-    """Refusals name the key: a parametric key beside a profile file, an entry radius or a second cone that does not fit, a
-    die kind drawing does not have, Example 1's key on a conical die, an angle out of range."""
+    """Refusals name the key: a parametric key beside a profile file, an entry radius or a second
+    cone that does not fit, a die kind drawing does not have, Example 1's key on a conical die, an
+    angle out of range."""
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "drawing"}, "geometry": geometry})
     assert error.value.key == key
@@ -154,9 +155,9 @@ def test_square_die_keys_stay_apart():
 @pytest.mark.parametrize("symmetry", ["axisymmetric", "plane_strain"])
 def test_conical_extrusion_ram_pressure(symmetry, tmp_path):
     """A 10 -> 6 billet through a 30 deg die with an entry radius and friction factor 0.3 (Newton,
-    coarse Q2): converged in at most 15 solves; the ram pressure over the flow stress above the ideal
-    work (ln(A0/A1), or 2/sqrt3 ln(h0/h1) in plane strain) and below three times it; die.csv and
-    die.png written with the profile's x and y."""
+    coarse Q2): converged in at most 15 solves; the ram pressure over the flow stress above the
+    ideal work (ln(A0/A1), or 2/sqrt3 ln(h0/h1) in plane strain) and below three times it; die.csv
+    and die.png written with the profile's x and y."""
     ends = "diameter" if symmetry == "axisymmetric" else "thickness"
     scene = scene_from_dict({
         "process": {"kind": "extrusion", "velocity": 1.0},

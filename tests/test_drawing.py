@@ -1,5 +1,5 @@
-"""Example 2 (drawing through a 6 degree die) on a coarse mesh: bounds, contact set, friction, the force
-balance, die.csv, and the same numbers on 1 and 2 ranks."""
+"""Example 2 (drawing through a 6 degree die) on a coarse mesh: bounds, contact set, friction, the
+force balance, die.csv, and the same numbers on 1 and 2 ranks."""
 import csv
 import json
 import math
@@ -86,8 +86,9 @@ def test_drawing_same_numbers_on_one_and_all_ranks():
 
 
 def test_exact_slip_line_field_is_approached_from_above():
-    """Frictionless drawing at r = 2 sin(a)/(1 + 2 sin(a)): Hill's field (triangle + centred fan) is exact,
-    q = 2k(1 + a)(1 - r). The flow solution approaches it from above as the mesh is refined."""
+    """Frictionless drawing at r = 2 sin(a)/(1 + 2 sin(a)): Hill's field (triangle + centred fan) is
+    exact, q = 2k(1 + a)(1 - r). The flow solution approaches it from above as the mesh is
+    refined."""
     angle = math.radians(6.0)
     r = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
     exact_q = 2 * 100 * (1 + angle) * (1 - r)

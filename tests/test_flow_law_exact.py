@@ -1,7 +1,7 @@
 """Exact homogeneous solutions of the flow law (verification.md), solved by the secant iteration.
 
-The whole boundary of a rectangle carries the exact velocity; the first, uniform-modulus solve already
-reproduces it, the secant update then gives the law's stress: plane-strain compression
+The whole boundary of a rectangle carries the exact velocity; the first, uniform-modulus solve
+already reproduces it, the secant update then gives the law's stress: plane-strain compression
 sigma_xx - sigma_yy = 2k, simple shear sigma_xy = sigma_p(gamma/sqrt3)/sqrt3.
 """
 import dolfinx.fem

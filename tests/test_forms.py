@@ -1,5 +1,5 @@
-"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the force
-balance; compiled forms equal their quadrature rules assembled apart."""
+"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the
+force balance; compiled forms equal their quadrature rules assembled apart."""
 import dolfinx.fem
 import dolfinx.fem.petsc
 import pytest
@@ -85,22 +85,23 @@ def _relative(a: PETSc.Vec, b: PETSc.Vec, scale: float | None = None) -> float:
 
 
 def _term_scale(form) -> float:
-    """The sum of the norms of a linear form's rules assembled apart: the size of the terms whose sum
-    (a residual near a solution) is far smaller; rounding errors are relative to it."""
+    """The sum of the norms of a linear form's rules assembled apart: the size of the terms whose
+    sum (a residual near a solution) is far smaller; rounding errors are relative to it."""
     return sum(_apart(rule).vector().norm() for rule in _rules(form))
 
 
 @pytest.mark.parametrize("element", ["Q1", "Q2"])
 def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
-    """FFCx miscomputes a scalar or linear form integrating a coefficient's derivatives with a one-point
-    rule beside another rule (Q1's reduced penalty term; forms.split_form). At a secant iterate of
-    Example 1 with contact and averaged friction (mu = 0.1, every term present), with reduced
-    integration: the secant residual, Newton's energy and residual (as FlowProblem compiles them) and
-    the secant matrix and Newton's operator (compiled as one form each) equal the sums of their
-    quadrature rules compiled apart, to rounding; and Newton's residual, the derivative of its energy,
-    equals the secant residual b(u; u, v) at u (one Euler equation). Residual differences are taken
-    relative to the sum of the rules' norms. Compiled as one form, the Q1 residual misses the sum of
-    its rules by 3.6e-2 of that scale (measured with split_form disabled), and Newton stalled on Q1."""
+    """FFCx miscomputes a scalar or linear form integrating a coefficient's derivatives with a
+    one-point rule beside another rule (Q1's reduced penalty term; forms.split_form). At a secant
+    iterate of Example 1 with contact and averaged friction (mu = 0.1, every term present), with
+    reduced integration: the secant residual, Newton's energy and residual (as FlowProblem compiles
+    them) and the secant matrix and Newton's operator (compiled as one form each) equal the sums of
+    their quadrature rules compiled apart, to rounding; and Newton's residual, the derivative of its
+    energy, equals the secant residual b(u; u, v) at u (one Euler equation). Residual differences
+    are taken relative to the sum of the rules' norms. Compiled as one form, the Q1 residual misses
+    the sum of its rules by 3.6e-2 of that scale (measured with split_form disabled), and Newton
+    stalled on Q1."""
     scene = make_scene(friction={"mu": 0.1},
                        discretisation={"mesh_size": 0.5, "element": element, "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},

@@ -132,8 +132,8 @@ def test_msh_file_has_named_roles(tmp_path):
 
 
 def test_mesh_partition_repeats(monkeypatch):
-    """Eight builds of the same mesh distribute its cells alike (with SCOTCH's threads, builds of this
-    mesh differed), in balanced parts, and SCOTCH_PTHREAD_NUMBER is left as it was."""
+    """Eight builds of the same mesh distribute its cells alike (with SCOTCH's threads, builds of
+    this mesh differed), in balanced parts, and SCOTCH_PTHREAD_NUMBER is left as it was."""
     comm = MPI.COMM_WORLD
     monkeypatch.setenv("SCOTCH_PTHREAD_NUMBER", "2")
     scene = make_scene(discretisation={"mesh_size": 0.25})

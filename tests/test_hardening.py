@@ -43,7 +43,8 @@ def test_cone_with_hardening(law):
 
 def test_cone_hardening_converges_under_refinement():
     """Hollomon through the cone on Q1: the exit stress error falls with the mesh (measured 0.259 %,
-    0.134 %, 0.069 % on 4, 8, 16 cells: order 0.95) and the exit strain error too (order 1.0 to 1.6)."""
+    0.134 %, 0.069 % on 4, 8, 16 cells: order 0.95) and the exit strain error too (order 1.0 to
+    1.6)."""
     runs = [radial_flow("axisymmetric", 0.0, "Q1", cells, material=LAWS["hollomon"])
             for cells in (4, 8, 16)]
     stress = [abs(r["exit_stress"] / r["exact_exit_stress"] - 1) for r in runs]

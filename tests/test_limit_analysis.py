@@ -44,7 +44,8 @@ def test_triangulation_covers_the_strip_with_crossed_diagonals():
 
 
 def test_bounds_bracket_the_exact_slip_line_load():
-    """Where Hill's field is exact (r = 0.1729) the lower bound is within 1 % below and the upper bound above."""
+    """Where Hill's field is exact (r = 0.1729) the lower bound is within 1 % below and the upper
+    bound above."""
     geometry = resolved(DrawingGeometry(exit_thickness=EXACT_EXIT))
     low = lower_bound(geometry, K, 0.1, 0.4, sides=32)
     high = upper_bound(geometry, K, 0.1, 0.4, sides=32)
@@ -54,8 +55,8 @@ def test_bounds_bracket_the_exact_slip_line_load():
 
 
 def test_paper_load_lies_above_the_quoted_slip_line_value():
-    """An equilibrium stress field carries a die pressure above 250 = 2.5 k: the quoted value is below the
-    load of the paper's strip (docs/example2.md)."""
+    """An equilibrium stress field carries a die pressure above 250 = 2.5 k: the quoted value is
+    below the load of the paper's strip (docs/example2.md)."""
     low = lower_bound(resolved(DrawingGeometry()), K, 0.05, 0.2, sides=24)
     assert low.die_pressure > 1.015 * 250.0
     assert low.drawing_stress == pytest.approx(low.die_pressure * 0.0625 / 0.75)

@@ -31,7 +31,8 @@ def test_power_law_floor():
 
 @pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0), PowerLaw(n=0.3).resolve(1.0)])
 def test_condition_2_10(law):
-    """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant non-increasing."""
+    """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant
+    non-increasing."""
     rates = np.logspace(-8, 6, 2001)
     sigma, secant = law.flow_stress(rates), law.secant(rates)
     slope = np.diff(sigma) / np.diff(rates)
@@ -127,8 +128,8 @@ def test_named_material_cited_and_overridden():
 
 
 def test_sellars_tegart_law():
-    """AA6063 (reference section 4) against sigma = asinh((Z/A)^(1/n))/alpha_s at 450 C: 25.62 MPa at
-    1/s (the power-law fit of demos/aluminium_rod.toml gives 25.6); (2.10) and the temperature
+    """AA6063 (reference section 4) against sigma = asinh((Z/A)^(1/n))/alpha_s at 450 C: 25.62 MPa
+    at 1/s (the power-law fit of demos/aluminium_rod.toml gives 25.6); (2.10) and the temperature
     checked by key; the Gauss-Legendre potential against an adaptive quadrature of sigma."""
     import dolfinx.fem
     import dolfinx.mesh

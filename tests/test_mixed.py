@@ -1,5 +1,5 @@
-"""The mixed velocity-pressure formulation (Q2 velocity, discontinuous P1 pressure): the d -> 0 limit of
-the penalty problem (Theorem 3.1) computed directly."""
+"""The mixed velocity-pressure formulation (Q2 velocity, discontinuous P1 pressure): the d -> 0
+limit of the penalty problem (Theorem 3.1) computed directly."""
 import pytest
 
 from forming_fenicsx.core.errors import SceneError
@@ -19,9 +19,9 @@ def limit_and_mixed(kind: str, discretisation: dict, d_values: tuple, **sections
 
 
 def test_extrusion_mixed_matches_the_penalty_limit():
-    """Example 1, h = 0.25 (measured: mixed 2.8029, penalty 2.8192 at d = 1e-5, 1e-7: -0.58 %); the mixed
-    pressure is exactly divergence-free against P1 and its ram-face mean is the ram pressure, unlike the
-    penalty's p_av at d = 1e-3 (1.63 there, docs/example1.md)."""
+    """Example 1, h = 0.25 (measured: mixed 2.8029, penalty 2.8192 at d = 1e-5, 1e-7: -0.58 %); the
+    mixed pressure is exactly divergence-free against P1 and its ram-face mean is the ram pressure,
+    unlike the penalty's p_av at d = 1e-3 (1.63 there, docs/example1.md)."""
     penalty, mixed = limit_and_mixed("extrusion", {"mesh_size": 0.25}, (1e-5, 1e-7))
     assert penalty[0]["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=1e-4)  # the d -> 0 limit
     assert mixed["converged"] and mixed["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=0.01)

@@ -1,4 +1,5 @@
-"""An exception on one MPI rank ends every rank with that rank's message: no deadlock, no results."""
+"""An exception on one MPI rank ends every rank with that rank's message: no deadlock, no
+results."""
 import os
 import subprocess
 import sys

@@ -16,10 +16,10 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 def test_copper_wire_demo(shared_tmp):
-    """demos/copper_wire.toml as shipped: Newton in at most 15 solves; the drawing stress between Sachs'
-    (no redundant work, no bearing) and 1.4 times it (measured 1.21: Delta = 1.99); the force over the
-    exit area; forces of the whole wire in N; the die pushed apart. Without its figures (1.6 s; the
-    figures of this scene are drawn and checked by tests/test_figures.py)."""
+    """demos/copper_wire.toml as shipped: Newton in at most 15 solves; the drawing stress between
+    Sachs' (no redundant work, no bearing) and 1.4 times it (measured 1.21: Delta = 1.99); the force
+    over the exit area; forces of the whole wire in N; the die pushed apart. Without its figures
+    (1.6 s; the figures of this scene are drawn and checked by tests/test_figures.py)."""
     scene = load_scene(DEMOS / "copper_wire.toml", ["output.figures=false"])
     summary = run_scene(scene, shared_tmp / "copper_wire")
     sigma0 = summary["scales"]["flow_stress"]
@@ -61,7 +61,8 @@ def test_back_tension_adds_to_the_drawing_stress(symmetry):
 
 def test_friction_factor_below_avitzur_bound():
     """m = 0.1, 19 % reduction of area through 8 degrees: the FE drawing stress (a rigid-plastic
-    solution) lies below Avitzur's upper bound and above the ideal work ln(A0/A1); m = 0.2 costs more."""
+    solution) lies below Avitzur's upper bound and above the ideal work ln(A0/A1); m = 0.2 costs
+    more."""
     low, high = drawing("axisymmetric", {"law": "factor", "m": 0.1}), drawing("axisymmetric",
                                                                            {"law": "factor", "m": 0.2})
     assert -math.log(0.81) < low < avitzur_drawing_stress(0.19, 8.0, 0.1)

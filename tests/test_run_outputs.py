@@ -136,7 +136,8 @@ def test_restart_from_a_previous_run(shared_tmp, capsys):
     assert b["restarted_from"] == str(first)
     assert b["linear_solves"] <= 2 < a["linear_solves"]
     assert b["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
-    # the restart file does not depend on the partition: restart this rank's own serial solve from it
+    # the restart file does not depend on the partition: restart this rank's own serial solve from
+    # it
     scene = load_scene(DEMO, ["discretisation.mesh_size=1.0"])
     serial = solve_scene(scene, comm=MPI.COMM_SELF, restart=first)[2]
     assert serial["linear_solves"] <= 2 and serial["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
@@ -148,8 +149,8 @@ def test_restart_from_a_previous_run(shared_tmp, capsys):
 
 
 def test_zero_pivot_stops_with_reason(shared_tmp):
-    """PETSc's own LU told that every pivot is zero (on 2 ranks it refuses the parallel matrix): either
-    way the run ends at the first solve with the reason, not a traceback."""
+    """PETSc's own LU told that every pivot is zero (on 2 ranks it refuses the parallel matrix):
+    either way the run ends at the first solve with the reason, not a traceback."""
     out = shared_tmp / "pivot"
     assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-pc_type", "lu", "-pc_factor_mat_solver_type",
                  "petsc", "-pc_factor_zeropivot", "1e300"]) == 3
@@ -161,10 +162,10 @@ def test_zero_pivot_stops_with_reason(shared_tmp):
 
 @pytest.mark.no_parallel_content  # a serial child process (tests/conftest.py)
 def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user_permissions(shared_tmp):
-    """A first run compiles every form (FFCx logs each gcc command through the root logger's handler,
-    about 30 lines before the fix): with --quiet a converged run without warnings prints nothing, and
-    the output folder gets the user's umask (it was mkdtemp's 0700). Run in a child process (rank 0)
-    with an empty form cache."""
+    """A first run compiles every form (FFCx logs each gcc command through the root logger's
+    handler, about 30 lines before the fix): with --quiet a converged run without warnings prints
+    nothing, and the output folder gets the user's umask (it was mkdtemp's 0700). Run in a child
+    process (rank 0) with an empty form cache."""
     out = shared_tmp / "quiet"
     if MPI.COMM_WORLD.rank == 0:
         env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
@@ -184,8 +185,8 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
 
 
 def test_a_run_leaves_no_petsc_options_behind():
-    """PETSc's options database holds 512 entries: each run's prefixed solver options are removed when
-    its solvers are destroyed (the whole suite in one process once filled it)."""
+    """PETSc's options database holds 512 entries: each run's prefixed solver options are removed
+    when its solvers are destroyed (the whole suite in one process once filled it)."""
     from petsc4py import PETSc
 
     before = set(PETSc.Options().getAll())

@@ -50,7 +50,8 @@ def check(data) -> None:
 @settings(max_examples=2000, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(base=st.sampled_from(BASES), choice=st.data())
 def test_mutated_demo_scenes(base, choice):
-    """One value of a demo scene replaced: mostly an existing key, sometimes any key of any section."""
+    """One value of a demo scene replaced: mostly an existing key, sometimes any key of any
+    section."""
     data = copy.deepcopy(base)
     existing = [(section, key) for section, table in data.items() for key in table]
     section, key = choice.draw(st.one_of(st.sampled_from(existing),
@@ -68,7 +69,8 @@ def test_random_scenes(data):
 
 
 def test_both_outcomes_were_exercised():
-    """Runs after the two property tests (file order): both paths must have been taken many times."""
+    """Runs after the two property tests (file order): both paths must have been taken many
+    times."""
     print(f"\ngenerated scenes: {dict(outcomes)}")
     # measured: 191 accepted of 4000 with hypothesis 6.67 (Debian 12), 88 with 6.130 (Debian 13)
     assert outcomes["accepted"] > 40 and outcomes["rejected"] > 1000

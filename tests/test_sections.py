@@ -1,4 +1,5 @@
-"""Section means of the axial stress (sections.py) and the element-wise L2 projection behind them."""
+"""Section means of the axial stress (sections.py) and the element-wise L2 projection behind
+them."""
 from __future__ import annotations
 
 import math

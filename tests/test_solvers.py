@@ -1,5 +1,5 @@
-"""Secant iteration control: stall detection, and a clear stop where large friction makes the modified
-method oscillate; the factorisation each method uses and why."""
+"""Secant iteration control: stall detection, and a clear stop where large friction makes the
+modified method oscillate; the factorisation each method uses and why."""
 import json
 
 import numpy as np
@@ -62,7 +62,8 @@ class _Injected:
             if injected.calls >= 3:
                 spoil(linear.problem.u, injected.calls)
         monkeypatch.setattr(LinearSolver, "solve", solve)
-        # a spoiled iterate is no solution of its system: keep the ill-conditioning check out of these tests
+        # a spoiled iterate is no solution of its system: keep the ill-conditioning check out of
+        # these tests
         monkeypatch.setattr(LinearSolver, "error_estimate", lambda linear: 0.0)
 
 
@@ -87,9 +88,9 @@ def test_growing_increment_stops_at_once(monkeypatch):
 
 
 def test_ill_conditioned_penalty_stops_with_a_clear_message():
-    """d = 1e-13 makes K so stiff that the estimated error of a linear solve exceeds 10 delta: the run
-    says so after two solves instead of stalling; d = 1e-8 converges with a small estimate (3e-8) and
-    the same ram pressure as d = 1e-6."""
+    """d = 1e-13 makes K so stiff that the estimated error of a linear solve exceeds 10 delta: the
+    run says so after two solves instead of stalling; d = 1e-8 converges with a small estimate
+    (3e-8) and the same ram pressure as d = 1e-6."""
     stiff = solve_scene(make_scene(penalty={"d": 1e-13}, discretisation={"mesh_size": 0.5}))
     assert not stiff[1].converged and stiff[1].linear_solves <= 3
     assert stiff[1].reason.startswith("ill-conditioned linear systems") and "penalty.d = 1e-13" in stiff[1].reason
@@ -114,9 +115,10 @@ def asymmetry(A) -> float:
                            "discretisation": {"mesh_size": 0.15, "element": "Q2", "volumetric_integration": "reduced"}}),
 ])
 def test_penalty_secant_systems_are_symmetric_and_cholesky_gives_the_lu_answer(quantity, sections):
-    """The secant methods factorise the penalty system b(w; u, v) by Cholesky by default, which needs it
-    symmetric: at the converged iterate (contact and friction active) ||A - A^T|| is rounding, and the
-    answer is LU's after as many solves (measured: 6e-12 and 3.1e-9 apart, delta = 1e-6)."""
+    """The secant methods factorise the penalty system b(w; u, v) by Cholesky by default, which
+    needs it symmetric: at the converged iterate (contact and friction active) ||A - A^T|| is
+    rounding, and the answer is LU's after as many solves (measured: 6e-12 and 3.1e-9 apart,
+    delta = 1e-6)."""
     values = {}
     for pc_type in ("cholesky", "lu"):
         scene = make_scene(**sections, solver={"method": "direct", "tolerance": 1e-6, "max_iterations": 1000,
@@ -156,10 +158,11 @@ def dense(A) -> np.ndarray:
 
 
 def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
-    """Newton's symmetrised primal-dual operator, with contact and averaged friction active and a dual
-    stress apart from tau(u) (after two Newton steps), is symmetric and positive definite, and shares
-    the secant start's Cholesky factorisation. Positive definiteness rests on the cap |tau_h| <= sigma_p:
-    with the dual three times tau(u) the same operator has negative eigenvalues."""
+    """Newton's symmetrised primal-dual operator, with contact and averaged friction active and a
+    dual stress apart from tau(u) (after two Newton steps), is symmetric and positive definite, and
+    shares the secant start's Cholesky factorisation. Positive definiteness rests on the cap
+    |tau_h| <= sigma_p: with the dual three times tau(u) the same operator has negative
+    eigenvalues."""
     scene = make_scene(process={"kind": "drawing"}, friction={"mu": 0.2},
                        discretisation={"mesh_size": 0.3, "element": "Q2", "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},
@@ -183,7 +186,8 @@ def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
 
 
 def test_mixed_newton_operator_is_factorised_by_lu():
-    """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the secant's."""
+    """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the
+    secant's."""
     scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature", "formulation": "mixed"},
                        solver={"method": "newton", "max_iterations": 1})
     problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
@@ -197,8 +201,9 @@ def test_mixed_newton_operator_is_factorised_by_lu():
 
 @pytest.mark.parametrize("method", ["direct", "newton"])
 def test_solve_error_is_sampled_on_solves_1_2_4_8_and_the_last(method):
-    """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear solves
-    1, 2, 4, 8, ... and on the last one of a converged run; the summary's value is the largest of those."""
+    """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear
+    solves 1, 2, 4, 8, ... and on the last one of a converged run; the summary's value is the
+    largest of those."""
     problem, result, summary = solve_scene(make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature"},
                                                       solver={"method": method}))
     assert result.converged and len(result.history) == result.linear_solves > 8

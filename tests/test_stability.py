@@ -1,6 +1,6 @@
-"""Stability at the extremes (docs/stability.md): each run converges to a finite result with a bounded,
-explained change, or stops or warns with a specific message. Coarse meshes: Example 1 at h = 0.5,
-Example 2 (Q2 reduced, direct method) at h = 0.1."""
+"""Stability at the extremes (docs/stability.md): each run converges to a finite result with a
+bounded, explained change, or stops or warns with a specific message. Coarse meshes: Example 1 at
+h = 0.5, Example 2 (Q2 reduced, direct method) at h = 0.1."""
 import math
 
 import pytest
@@ -24,8 +24,9 @@ def drawing(**sections) -> dict:
 
 
 def test_penalty_d_from_1e_1_to_1e_8():
-    """d = 1e-8 converges to the d -> 0 limit (measured +0.17 % from d = 1e-3); d = 1e-1 converges too,
-    but its material compresses (||div u||/||e(u)|| = 0.60): a failed check, named with its cause."""
+    """d = 1e-8 converges to the d -> 0 limit (measured +0.17 % from d = 1e-3); d = 1e-1 converges
+    too, but its material compresses (||div u||/||e(u)|| = 0.60): a failed check, named with its
+    cause."""
     base = solved()["ram_pressure"]
     stiff = solved(penalty={"d": 1e-8})
     assert stiff["converged"] and stiff["ram_pressure"] == pytest.approx(base, rel=5e-3)
@@ -37,11 +38,12 @@ def test_penalty_d_from_1e_1_to_1e_8():
 
 
 def test_newtonian_alpha_one_first_iterate_is_the_answer():
-    """alpha = 1 makes G = A constant (inside [rate1, rate2] and, clipped, outside): the first linear
-    solve is the answer up to the contact active set, which starts as the whole die face; the second
-    solve drops the separating points (an increment of 2.7e-7 that scales with d_N: 2.7e-9 at d_N
-    100 times smaller) and the third changes nothing: its increment is rounding (1e-15 to 1e-14, the
-    order varying with MUMPS' parallel scheduling), bounded here by 1e-12, far below the second's."""
+    """alpha = 1 makes G = A constant (inside [rate1, rate2] and, clipped, outside): the first
+    linear solve is the answer up to the contact active set, which starts as the whole die face; the
+    second solve drops the separating points (an increment of 2.7e-7 that scales with d_N: 2.7e-9 at
+    d_N 100 times smaller) and the third changes nothing: its increment is rounding (1e-15 to 1e-14,
+    the order varying with MUMPS' parallel scheduling), bounded here by 1e-12, far below the
+    second's."""
     increments = {}
     for d_n in (1e-6, 1e-8):
         scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5}, penalty={"d_N": d_n},
@@ -55,8 +57,8 @@ def test_newtonian_alpha_one_first_iterate_is_the_answer():
 
 @pytest.mark.parametrize("alpha", [1e-4, 0.1])
 def test_rate_sensitivity_extremes(alpha):
-    """alpha = 1e-4 changes the ram pressure by 0.09 %, alpha = 0.1 lowers it by 9 % (the rates in the
-    die zone are below 1, where sigma_p = A rate**alpha < A)."""
+    """alpha = 1e-4 changes the ram pressure by 0.09 %, alpha = 0.1 lowers it by 9 % (the rates in
+    the die zone are below 1, where sigma_p = A rate**alpha < A)."""
     result = solved(material={"alpha": alpha})
     assert result["converged"]
     change = result["ram_pressure"] / solved()["ram_pressure"] - 1
@@ -65,8 +67,8 @@ def test_rate_sensitivity_extremes(alpha):
 
 @pytest.mark.parametrize("lam", [1e-3, 1e6])
 def test_consistent_velocity_scaling_scales_stresses_by_lam_to_the_alpha(lam):
-    """u -> lam u with the rate window and the penalties (d, d_N, d_T times lam**(1 - alpha)) scaled along
-    is the same problem with stresses times lam**alpha: measured to 1e-11 relative."""
+    """u -> lam u with the rate window and the penalties (d, d_N, d_T times lam**(1 - alpha)) scaled
+    along is the same problem with stresses times lam**alpha: measured to 1e-11 relative."""
     base = solved(solver={"method": "direct"})
     scale = lam ** (1 - ALPHA)
     scaled = solved(process={"velocity": lam}, material={"rate1": 1e-3 * lam, "rate2": 1e3 * lam},
@@ -88,8 +90,8 @@ def test_velocity_alone_scaled_down_warns_of_a_weak_penalty():
 
 @pytest.mark.parametrize("rate1", [1e-6, 1e-1])
 def test_rate1_extremes(rate1):
-    """rate1 from 1e-6 (secant bound eta_2 = 1e6 A: stiff rigid zones) to 1e-1: converged, ram pressure
-    within 3 % (measured +0.22 % and -2.7 %)."""
+    """rate1 from 1e-6 (secant bound eta_2 = 1e6 A: stiff rigid zones) to 1e-1: converged, ram
+    pressure within 3 % (measured +0.22 % and -2.7 %)."""
     result = solved(material={"rate1": rate1})
     assert result["converged"]
     assert result["ram_pressure"] == pytest.approx(solved()["ram_pressure"], rel=0.03)
@@ -129,8 +131,8 @@ def test_large_friction_converges_with_the_force_balance():
 
 
 def test_extrusion_reductions_5_to_80_percent():
-    """Ram pressure above the ideal-work bound 2k ln(H/h) and rising with the reduction (measured 0.554,
-    2.957, 5.468 at 5, 50 and 80 %), force balance closed."""
+    """Ram pressure above the ideal-work bound 2k ln(H/h) and rising with the reduction (measured
+    0.554, 2.957, 5.468 at 5, 50 and 80 %), force balance closed."""
     pressures = []
     for reduction in (0.05, 0.5, 0.8):
         result = solved(geometry={"exit_thickness": 10 * (1 - reduction)})

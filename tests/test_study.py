@@ -1,5 +1,5 @@
-"""`forming study`: the grid, errors against the exact value or a Richardson extrapolation, costs, the
-Pareto plot, and a restarted study that skips the runs it has."""
+"""`forming study`: the grid, errors against the exact value or a Richardson extrapolation, costs,
+the Pareto plot, and a restarted study that skips the runs it has."""
 import csv
 import json
 import math
@@ -104,7 +104,8 @@ def test_bad_study_file_names_the_key(shared_tmp, text, key):
 
 @pytest.mark.parametrize("path", sorted(DEMOS.glob("*.study.toml")), ids=lambda p: p.name)
 def test_demo_study_files_are_valid(path):
-    """Every study file of demos/ loads and every scene of its grid passes validation (nothing solved)."""
+    """Every study file of demos/ loads and every scene of its grid passes validation (nothing
+    solved)."""
     data, vary, _ = study.load_study(path)
     base, combinations, scenes = study.study_scenes(data, vary)
     assert len(scenes) == len(combinations) == math.prod(len(values) for _, values in study.parse_vary(vary)) >= 4

@@ -1,7 +1,7 @@
-"""Right answers in any consistent units: the default (relative) penalties make a run's dimensionless
-results independent of the unit system and, for a rate power law, of the velocity but for the law's
-own rate factor; the old absolute penalties in the wrong units end with a failed check, not a
-converged wrong answer."""
+"""Right answers in any consistent units: the default (relative) penalties make a run's
+dimensionless results independent of the unit system and, for a rate power law, of the velocity but
+for the law's own rate factor; the old absolute penalties in the wrong units end with a failed
+check, not a converged wrong answer."""
 import math
 import sys
 from pathlib import Path
@@ -30,9 +30,9 @@ def checked(kind: str, system: str, velocity: float) -> tuple[float, float]:
 
 @pytest.mark.parametrize("kind", ["drawing", "extrusion"])
 def test_three_unit_systems_and_velocities_1e_3_to_1e3_give_one_dimensionless_answer(kind):
-    """Measured: drawing sigma_d/sigma0 = 0.41303 (115.6 MPa at 1 mm/s), extrusion p/sigma0 = 1.77449;
-    the systems and velocities agree to 1e-7. The stress itself scales by lam^n = 1000^0.1 = 1.9953
-    from 1 to 1000 mm/s."""
+    """Measured: drawing sigma_d/sigma0 = 0.41303 (115.6 MPa at 1 mm/s), extrusion
+    p/sigma0 = 1.77449; the systems and velocities agree to 1e-7. The stress itself scales by
+    lam^n = 1000^0.1 = 1.9953 from 1 to 1000 mm/s."""
     base, stress = checked(kind, "mm", 1.0)
     for system in ("m", "in"):
         other, other_stress = checked(kind, system, 1.0)
@@ -58,11 +58,12 @@ def example2(velocity: float, paper_penalties: bool) -> dict:
 
 
 def test_example2_at_velocity_1_right_by_default_and_a_clear_no_with_the_papers_penalties():
-    """The paper's d_N = 0.01 is absolute: at velocity 1 instead of 1000 the strip passed through the
-    die (q_av 10.44, drawing stress 0.87, reported converged). Now the run fails, naming d_N. With the
-    default relative penalties velocity 1 gives the answer of velocity 1000 over the rate factor
-    1000^alpha = 1.0069 of (4.5), within 1 % (measured on this mesh: 70.18 against 71.13 / 1.0069 =
-    70.64; the rest is the paper's penalties at 1000 and the work done above rate2 there)."""
+    """The paper's d_N = 0.01 is absolute: at velocity 1 instead of 1000 the strip passed through
+    the die (q_av 10.44, drawing stress 0.87, reported converged). Now the run fails, naming d_N.
+    With the default relative penalties velocity 1 gives the answer of velocity 1000 over the rate
+    factor 1000^alpha = 1.0069 of (4.5), within 1 % (measured on this mesh: 70.18 against
+    71.13 / 1.0069 = 70.64; the rest is the paper's penalties at 1000 and the work done above rate2
+    there)."""
     reference = example2(1000.0, paper_penalties=True)
     wrong = example2(1.0, paper_penalties=True)
     assert not wrong["converged"] and wrong["iteration_converged"]
@@ -76,12 +77,12 @@ def test_example2_at_velocity_1_right_by_default_and_a_clear_no_with_the_papers_
 
 @pytest.mark.parametrize("system", ["mm", "m"])
 def test_strip_in_mm_and_m_right_by_default_and_a_clear_no_with_old_absolute_penalties(system):
-    """demos/strip_mm.toml: 2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa at 1 mm/s
-    (default mesh, 30k unknowns, 4 s). With the old default
+    """demos/strip_mm.toml: 2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa
+    at 1 mm/s (default mesh, 30k unknowns, 4 s). With the old default
     penalties (d = 0.005, d_N = 0.01 absolute) it gave 6.3 MPa (6.36 Pa in m), far below the ideal
-    work 2/sqrt3 300 ln(2/1.6) = 77.3 MPa; now that run fails with the cause, and the default penalties
-    give 120.0 MPa in both systems (measured 119.996; 121.37 and 122.89 at mesh_size_relative 0.1
-    and 0.15)."""
+    work 2/sqrt3 300 ln(2/1.6) = 77.3 MPa; now that run fails with the cause, and the default
+    penalties give 120.0 MPa in both systems (measured 119.996; 121.37 and 122.89 at
+    mesh_size_relative 0.1 and 0.15)."""
     length, stress, names = SYSTEMS[system]
     common = read_scene_data(DEMOS / "strip_mm.toml", ["output.fields=false", "output.figures=false"])
     common["process"]["velocity"] /= length  # written in the other system

@@ -1,5 +1,6 @@
-"""Scenes with their own Gmsh .msh file: a round trip of `forming mesh`, and clear messages for meshes
-with missing or overlapping roles, wrong dimension, unsupported cells or inverted elements."""
+"""Scenes with their own Gmsh .msh file: a round trip of `forming mesh`, and clear messages for
+meshes with missing or overlapping roles, wrong dimension, unsupported cells or inverted
+elements."""
 import gmsh
 import pytest
 from mpi4py import MPI
@@ -120,9 +121,9 @@ def test_missing_file_is_a_scene_error(tmp_path):
 
 
 def test_thicknesses_come_from_the_mesh_file(shared_tmp):
-    """A drawing mesh of a 1.625 -> 1.4 strip: the scene takes its thicknesses and length from the file
-    (the drawing stress divides by the mesh's exit half-thickness, not a default), refuses values that
-    disagree and die keys that cannot apply."""
+    """A drawing mesh of a 1.625 -> 1.4 strip: the scene takes its thicknesses and length from the
+    file (the drawing stress divides by the mesh's exit half-thickness, not a default), refuses
+    values that disagree and die keys that cannot apply."""
     built_in = make_scene(process={"kind": "drawing"}, geometry={"exit_thickness": 1.4},
                           discretisation={"mesh_size": 0.2})
     path = shared_tmp / "drawing.msh"
