@@ -2,9 +2,9 @@
 #
 #     mpirun -n 2 python demos/channel_flow_orders.py
 #
-# Prints the L2 and H1 velocity errors on 4, 8, 16 cells across the half channel and the observed orders,
-# for Q1 and Q2 with the secant averaged at the nodes (the paper), at element centres, or evaluated at
-# the quadrature points.
+# Prints the L2 and H1 velocity errors on 4, 8, 16 cells across the half channel and the observed
+# orders, for Q1 and Q2 with the secant averaged at the nodes (the paper), at element centres, or
+# evaluated at the quadrature points.
 from mpi4py import MPI
 
 from forming_fenicsx.core.report import markdown_table

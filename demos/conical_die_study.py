@@ -2,8 +2,9 @@
 Avitzur (friction factor m) over die semi-angles, reductions and friction (docs/conical_dies.md).
 
 Axisymmetric, the paper's law (4.5) with A = 1 (nearly rate-independent: sigma0 = sigma_p at the
-process rate), no land, default mesh (Q2). Writes results/conical_dies.json, docs/conical_dies.md and
-docs/conical_dies.png. Run: .venv/bin/python demos/conical_die_study.py (about 5 minutes, 1 core).
+process rate), no land, default mesh (Q2). Writes results/conical_dies.json, docs/conical_dies.md
+and docs/conical_dies.png. Run: .venv/bin/python demos/conical_die_study.py (about 5 minutes, 1
+core).
 """
 from __future__ import annotations
 

@@ -42,7 +42,8 @@ except SceneError as error:
 
 # ## Solve and write results
 # The mesh is built by gmsh on rank 0 and distributed; the secant-modulus iteration runs until the
-# relative increment falls below delta; results go to summary.json, history.csv, fields.xdmf and PNGs.
+# relative increment falls below delta; results go to summary.json, history.csv, fields.xdmf and
+# PNGs.
 out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
 summary = run_scene(scene, out, title=Path(args.scene).stem, overwrite=True)  # a re-run replaces its results
 

@@ -1,6 +1,7 @@
 # # Example 1 measured: mesh convergence, the penalty's effect on p_av, and the two secant methods
 #
-#     mpirun -n 2 python demos/example1_study.py [--sizes 0.5 0.25 0.125 0.0625] [--out results/example1_study]
+#     mpirun -n 2 python demos/example1_study.py [--sizes 0.5 0.25 0.125 0.0625]
+#                                                [--out results/example1_study]
 #
 # Prints three tables (markdown) and writes them as JSON. docs/example1.md shows one run of it.
 

@@ -1,15 +1,16 @@
 # # Rigorous bounds on Example 2's frictionless die pressure (limit analysis)
 #
-#     python demos/example2_bounds.py [--sizes 0.05:0.2 0.025:0.1] [--sides 48] [--out results/example2_bounds]
+#     python demos/example2_bounds.py [--sizes 0.05:0.2 0.025:0.1] [--sides 48]
+#                                     [--out results/example2_bounds]
 #
 # The paper quotes a slip-line die pressure q = 2.5 k = 250 for its drawing example. This script
-# brackets the die pressure of the rigid-perfectly plastic strip (k = A/sqrt(3), the limit alpha -> 0
-# of (4.5)) with the same geometry and boundary conditions as the finite element runs, mu = 0: a
-# lower bound from an equilibrium stress field and an upper bound from an incompressible velocity
-# field, both optimised by linear programming (`forming_fenicsx.verification.limit_analysis`). Each size pair is
-# "smallest:largest" element size. It runs for the paper's reduction and for the reduction where
-# Hill's slip-line field is exact (q = 182.74), a check of both bounds. Serial; docs/example2.md
-# shows a run.
+# brackets the die pressure of the rigid-perfectly plastic strip (k = A/sqrt(3), the limit
+# alpha -> 0 of (4.5)) with the same geometry and boundary conditions as the finite element runs,
+# mu = 0: a lower bound from an equilibrium stress field and an upper bound from an incompressible
+# velocity field, both optimised by linear programming
+# (`forming_fenicsx.verification.limit_analysis`). Each size pair is "smallest:largest" element
+# size. It runs for the paper's reduction and for the reduction where Hill's slip-line field is
+# exact (q = 182.74), a check of both bounds. Serial; docs/example2.md shows a run.
 
 import argparse
 import json

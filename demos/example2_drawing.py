@@ -1,7 +1,7 @@
 # # Example 2: plane-strain drawing through a 6 degree die, mu = 0, 0.2, 0.4
 #
-# Angelov (2014), section 4, Example 2: a strip 1.625 thick is drawn to 1.5 at velocity 1000 through a
-# die of semi-angle 6 degrees; k = 100. The paper reports mean die pressures q_av = 243, 255, 273;
+# Angelov (2014), section 4, Example 2: a strip 1.625 thick is drawn to 1.5 at velocity 1000 through
+# a die of semi-angle 6 degrees; k = 100. The paper reports mean die pressures q_av = 243, 255, 273;
 # the slip-line value for mu = 0 is q = 2.5 k = 250.
 #
 #     mpirun -n 2 python demos/example2_drawing.py

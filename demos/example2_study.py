@@ -1,6 +1,7 @@
 # # Example 2 measured: drawing through a 6 degree die against the paper and the slip-line solution
 #
-#     mpirun -n 2 python demos/example2_study.py [--sizes 0.1 0.05 0.025] [--out results/example2_study]
+#     mpirun -n 2 python demos/example2_study.py [--sizes 0.1 0.05 0.025]
+#                                                [--out results/example2_study]
 #
 # Prints markdown tables and writes them as JSON; docs/example2.md shows one run.
 
@@ -77,7 +78,8 @@ table("q_av and drawing stress (direct method to delta = 1e-4 and force balance 
 table("Extrapolated (Richardson on the three finest meshes)", ["mu", "element", "quantity", "value", "order"],
       [[e["mu"], e["element"], e["quantity"], e["value"], e["order"]] for e in results["extrapolated"]])
 
-# ## 2. How q_av is measured (mu = 0, h = 0.05): penalty or stress, with or without the die-entry spike
+# ## 2. How q_av is measured (mu = 0, h = 0.05): penalty or stress, with or without the die-entry
+# spike
 size = args.sizes[len(args.sizes) // 2]
 for element, settings in ELEMENTS.items() if "measures" in args.parts else []:
     for pressure in ("penalty", "stress"):
@@ -90,8 +92,9 @@ table(f"q_av by measure (mu = 0, h = {size})", ["element", "pressure from", "ent
       [[r["element"], r["die_pressure"], r["trim"], r["mean_die_pressure"], r["projected_die_pressure"],
         r["drawing_stress"]] for r in results["measures"]])
 
-# ## 3. Where the velocity is prescribed: pulled at the exit (1000) or pushed at the entry (1000 h1/h0)
-# for each friction coefficient of the reproduction table (friction adds to a push and lowers q under a pull)
+# ## 3. Where the velocity is prescribed: pulled at the exit (1000) or pushed at the entry
+# (1000 h1/h0) for each friction coefficient of the reproduction table (friction adds to a push
+# and lowers q under a pull)
 for mu in args.mu if "drive" in args.parts else []:
     for element in args.elements:
         for drive, velocity in (("pull", 1000.0), ("push", 1000.0 * h1 / h0)):
@@ -123,9 +126,10 @@ table("Rate sensitivity alpha, and volume crossing the free strip surfaces over 
       [[r["alpha"], r["mesh_size"], r["mean_die_pressure"], r["drawing_stress"], r["free_surface_crossing"]]
        for r in results["rate"]])
 
-# ## 6. Verification against an exact slip-line field (Hill): frictionless drawing through a wedge at the
-# reduction r = 2 sin(a)/(1 + 2 sin(a)), where a triangle and a centred fan of angle a make the whole field;
-# equilibrium along it gives q = 2k(1 + a)(1 - r) and the drawing stress t = 2k(1 + a) r.
+# ## 6. Verification against an exact slip-line field (Hill): frictionless drawing through a wedge
+# at the reduction r = 2 sin(a)/(1 + 2 sin(a)), where a triangle and a centred fan of angle a make
+# the whole field; equilibrium along it gives q = 2k(1 + a)(1 - r) and the drawing stress
+# t = 2k(1 + a) r.
 angle = math.radians(geometry.die_angle)
 r_exact = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
 k = load_scene(args.scene).material.flow_stress(__import__("numpy").array([1.0]))[0] / math.sqrt(3)
@@ -147,9 +151,10 @@ table(f"Exact slip-line field, r = {r_exact:.4f} (k = {k:.3f}: q = {exact_q:.2f}
         r.get("drawing_stress", math.nan), f"{100 * (r.get('drawing_stress', math.nan) / exact_t - 1):+.2f}%"]
        for r in results["exact"]])
 
-# ## 7. Where the secant G is evaluated, and the linear branch of (4.5) above rate2 = 1e3: the exact-field
-# case and the paper's case (mu = 0, Q2 reduced), G averaged at the nodes as in the paper or taken at the
-# Gauss points, with the paper's rate2 or with rate2 = 1e9 (no linear branch at these rates)
+# ## 7. Where the secant G is evaluated, and the linear branch of (4.5) above rate2 = 1e3: the
+# exact-field case and the paper's case (mu = 0, Q2 reduced), G averaged at the nodes as in the
+# paper or taken at the Gauss points, with the paper's rate2 or with rate2 = 1e9 (no linear branch
+# at these rates)
 VARIANTS = [("nodes", 1e3), ("quadrature", 1e3), ("quadrature", 1e9)]
 for case, exit_thickness, reference in (("exact field", h0 * (1 - r_exact), exact_q), ("paper", h1, SLIP_LINE_Q)):
     for averaging, rate2 in VARIANTS if "secant" in args.parts else []:

@@ -36,7 +36,8 @@ COMMON = ["solver.method=direct", "solver.force_tolerance=1e-3", "solver.max_ite
 
 
 def pressure_means(problem) -> np.ndarray:
-    """Element means of -sigma_H, gathered on every rank in cell order of the original mesh input."""
+    """Element means of -sigma_H, gathered on every rank in cell order of the original mesh
+    input."""
     means = cell_means(problem.mesh, -problem.hydrostatic_stress(), "pressure", problem.full_degree)
     cells = problem.mesh.topology.index_map(problem.mesh.topology.dim).size_local
     original = problem.mesh.topology.original_cell_index[:cells]
@@ -67,8 +68,8 @@ def main() -> None:
             difference = np.sqrt(np.sum(reference[:, 1] * (field[:, 0] - reference[:, 0]) ** 2)
                                  / np.sum(reference[:, 1] * reference[:, 0] ** 2))
             case_rows.append({"case": title, "formulation": "penalty", "d": d, **summary, "field_difference": difference})
-        # O(d): the limit from the three smallest d (the extrapolation needs no particular ratio), or the
-        # smallest d's value where rounding makes the differences non-monotone
+        # O(d): the limit from the three smallest d (the extrapolation needs no particular ratio),
+        # or the smallest d's value where rounding makes the differences non-monotone
         limit = richardson([r["d"] for r in case_rows], [r[quantity] for r in case_rows])[0]
         limit = limit if np.isfinite(limit) else case_rows[-1][quantity]
         mixed.update(case=title, formulation="mixed", d=0.0, field_difference=0.0)

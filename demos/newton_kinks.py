@@ -5,11 +5,12 @@
 # Newton's steps converge fast only once the points on each side of every kink of the operator have
 # settled. After each linear solve this prints the relative increment and, against the previous
 # iterate: the area of Gauss points whose rate crossed rate1 (the kink of (4.5) between the linear
-# branch of the rigid zones and the power law, where the tangent stiffness drops by the factor alpha),
-# the area that crossed rate2, and the length of die face whose contact state (u_N > 0, (3.4)) changed.
-# docs/solvers.md shows a run on Example 1 at 242k unknowns. Every Newton run's history.csv counts
-# the same switches (Gauss points across the kinks of the law, die nodes in and out of contact) per
-# step; this script weighs them as areas and lengths, and separates rate1 from rate2.
+# branch of the rigid zones and the power law, where the tangent stiffness drops by the factor
+# alpha), the area that crossed rate2, and the length of die face whose contact state (u_N > 0,
+# (3.4)) changed. docs/solvers.md shows a run on Example 1 at 242k unknowns. Every Newton run's
+# history.csv counts the same switches (Gauss points across the kinks of the law, die nodes in and
+# out of contact) per step; this script weighs them as areas and lengths, and separates rate1 from
+# rate2.
 
 import argparse
 from pathlib import Path

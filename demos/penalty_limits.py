@@ -1,13 +1,13 @@
 # # The relative penalties against their d, d_N, d_T -> 0 limits
 #
-# Each penalty of the scene (the volumetric d, the contact d_N, the slip regularisation d_T) is varied
-# alone over decades of its relative value, the others at their defaults, on three scenes: Example 1
-# (square die, mu = 0.1), Example 2 (6 degree die, mu = 0.2) and a 2.0 -> 1.6 mm strip through a 10
-# degree die with mu = 0.08 and a 300 MPa flow stress in mm, MPa and mm/s. Every run uses Q2 elements
-# with reduced integration, the secant at the Gauss points and Newton's method to delta = 1e-6, so
-# that the differences are the penalties' and not the iteration's.
+# Each penalty of the scene (the volumetric d, the contact d_N, the slip regularisation d_T) is
+# varied alone over decades of its relative value, the others at their defaults, on three scenes:
+# Example 1 (square die, mu = 0.1), Example 2 (6 degree die, mu = 0.2) and a 2.0 -> 1.6 mm strip
+# through a 10 degree die with mu = 0.08 and a 300 MPa flow stress in mm, MPa and mm/s. Every run
+# uses Q2 elements with reduced integration, the secant at the Gauss points and Newton's method to
+# delta = 1e-6, so that the differences are the penalties' and not the iteration's.
 #
-#     mpirun -n 2 .venv/bin/python demos/penalty_limits.py           # prints the tables of docs/penalties.md
+#     mpirun -n 2 .venv/bin/python demos/penalty_limits.py  # prints the tables of docs/penalties.md
 
 import argparse
 import copy
@@ -24,7 +24,8 @@ DEMOS = Path(__file__).parent
 COMMON = ["discretisation.element=Q2", "discretisation.volumetric_integration=reduced",
           "discretisation.averaging=quadrature", "solver.method=newton", "solver.tolerance=1e-6",
           "output.fields=false", "output.figures=false"]
-# the paper's absolute penalties are removed so that the relative defaults (or the varied value) apply
+# the paper's absolute penalties are removed so that the relative defaults (or the varied value)
+# apply
 RELATIVE = ["penalty.d", "penalty.d_N", "penalty.augmented", "friction.d_T"]
 STRIP = {"process": {"kind": "drawing", "velocity": 1.0},
          "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6, "die_angle": 10.0},

@@ -3,10 +3,11 @@
 #     mpirun -n 2 python demos/stability_map.py [--groups d alpha ...] [--out results/stability_map]
 #
 # Each row is one run of Example 1 (h = 0.5, Q2 reduced, direct method) or Example 2 (h = 0.1, Q2
-# reduced, direct method, force balance to 1e-3) with one parameter changed. A run must either converge
-# to a finite result whose change from the base run is bounded (and explained by the parameter), or stop
-# with a specific message. "solve error" is the largest estimated relative error of a linear solve
-# (one step of iterative refinement), the sign of ill-conditioned systems. docs/stability.md shows a run.
+# reduced, direct method, force balance to 1e-3) with one parameter changed. A run must either
+# converge to a finite result whose change from the base run is bounded (and explained by the
+# parameter), or stop with a specific message. "solve error" is the largest estimated relative error
+# of a linear solve (one step of iterative refinement), the sign of ill-conditioned systems.
+# docs/stability.md shows a run.
 
 import argparse
 import json
@@ -34,8 +35,9 @@ def powers(low: int, high: int, step: int = 1) -> list[float]:
 
 
 def velocity_cases(example, velocity: float) -> list[tuple[str, list[str]]]:
-    """Velocity scaled by lam: alone, and with the rate window and penalties scaled so that the problem
-    is exactly the base one with stresses times lam**alpha (u' = lam u, sigma' = lam**alpha sigma)."""
+    """Velocity scaled by lam: alone, and with the rate window and penalties scaled so that the
+    problem is exactly the base one with stresses times lam**alpha (u' = lam u, sigma' = lam**alpha
+    sigma)."""
     cases = []
     for lam in (1e-3, 1e-1, 1e2, 1e4, 1e6):
         penalty = lam ** (1 - ALPHA)

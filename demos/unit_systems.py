@@ -2,9 +2,9 @@
 #
 # Drawing (2.0 -> 1.6 mm, 10 degree die) and square-die extrusion (20 -> 12 mm), mu = 0.08, a rate
 # power law sigma = 300 MPa (rate in 1/s)^0.1, every numerical parameter at its relative default,
-# written in mm/MPa/N, m/Pa/N and in/psi/lbf and run at 1e-3, 1 and 1e3 mm/s (coarse meshes, Newton).
-# The dimensionless result (drawing stress or ram pressure over the flow stress at the process rate)
-# is the same in every row; the stress in MPa scales with the velocity by lam^0.1.
+# written in mm/MPa/N, m/Pa/N and in/psi/lbf and run at 1e-3, 1 and 1e3 mm/s (coarse meshes,
+# Newton). The dimensionless result (drawing stress or ram pressure over the flow stress at the
+# process rate) is the same in every row; the stress in MPa scales with the velocity by lam^0.1.
 # tests/test_units.py runs the same scenes.
 #
 #     .venv/bin/python demos/unit_systems.py
