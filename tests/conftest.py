@@ -28,7 +28,8 @@ NO_PARALLEL_CONTENT = "no_parallel_content"
 
 def pytest_configure(config):
     config.addinivalue_line("markers", f"{NO_PARALLEL_CONTENT}: the same serial work on any number "
-                            "of ranks (pure Python or a child process): run in the serial phase only")
+                            "of ranks (pure Python or a child process): "
+                            "run in the serial phase only")
     _remember_compiled_modules()
 
 
@@ -96,8 +97,10 @@ def shared_tmp(tmp_path: Path) -> Path:
 # The paper's absolute penalties of Examples 1 and 2 and its pure penalty contact, which the tests
 # of the paper's examples were written for; a test that names a penalty (absolute or relative)
 # replaces the paper's value.
-PAPER_PENALTIES = {"extrusion": {"penalty": {"d": 1e-3, "d_N": 1e-6, "augmented": False}, "friction": {"d_T": 1e-6}},
-                   "drawing": {"penalty": {"d": 5e-3, "d_N": 1e-2, "augmented": False}, "friction": {"d_T": 1e-6}}}
+PAPER_PENALTIES = {"extrusion": {"penalty": {"d": 1e-3, "d_N": 1e-6, "augmented": False},
+                                 "friction": {"d_T": 1e-6}},
+                   "drawing": {"penalty": {"d": 5e-3, "d_N": 1e-2, "augmented": False},
+                               "friction": {"d_T": 1e-6}}}
 
 
 def make_scene(**sections) -> Scene:

@@ -52,13 +52,15 @@ def test_radial_flow_orders(symmetry, n, element):
 def test_round_product_keys():
     """A round product has diameters; a strip has thicknesses: the other key is refused by name."""
     with pytest.raises(SceneError, match="geometry.entry_thickness"):
-        make_scene(process={"kind": "drawing"}, geometry={"symmetry": "axisymmetric", "entry_thickness": 2.0})
+        make_scene(process={"kind": "drawing"},
+                   geometry={"symmetry": "axisymmetric", "entry_thickness": 2.0})
     with pytest.raises(SceneError, match="geometry.exit_diameter"):
         make_scene(process={"kind": "drawing"}, geometry={"exit_diameter": 1.5})
     with pytest.raises(SceneError, match="geometry.symmetry"):
         make_scene(geometry={"symmetry": "axial"})
     scene = make_scene(process={"kind": "drawing"},
-                       geometry={"symmetry": "axisymmetric", "entry_diameter": 2.0, "exit_diameter": 1.8})
+                       geometry={"symmetry": "axisymmetric", "entry_diameter": 2.0,
+                                 "exit_diameter": 1.8})
     assert (scene.geometry.entry_thickness, scene.geometry.exit_thickness) == (2.0, 1.8)
     with pytest.raises(SceneError, match="geometry.symmetry"):
         strip_triangulation(scene.geometry, 0.1, 0.2)

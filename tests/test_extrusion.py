@@ -55,8 +55,8 @@ def test_ram_face_pressure_follows_the_penalty(d):
     assert p_ram == pytest.approx(solved(solver=DIRECT)["ram_pressure"], rel=2e-2)
 
 
-KEYS = ["ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "die_friction_force_x", "force_balance_residual",
-        "divergence_l2"]
+KEYS = ["ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "die_friction_force_x",
+        "force_balance_residual", "divergence_l2"]
 
 
 def test_same_numbers_on_one_and_all_ranks():
@@ -74,8 +74,10 @@ def test_same_numbers_on_one_and_all_ranks():
 def test_q1_with_complete_volumetric_integration_locks():
     """verification.md: Q1 with complete integration of the penalty term locks (pressure far too
     high)."""
-    reduced = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "reduced"})
-    complete = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "complete"})
+    reduced = solved(solver=DIRECT,
+                     discretisation={"element": "Q1", "volumetric_integration": "reduced"})
+    complete = solved(solver=DIRECT,
+                      discretisation={"element": "Q1", "volumetric_integration": "complete"})
     assert abs(reduced["ram_pressure"] / HILL - 1) < 0.2
     assert complete["ram_pressure"] > 1.4 * reduced["ram_pressure"]
 
@@ -107,6 +109,7 @@ def test_penalty_convergence_theorem_3_1():
 def test_friction_regularisation_converges():
     """As d_T -> 0 the regularised friction (3.11) converges (measured ram pressure 3.4281, 3.43475,
     3.43483 for d_T = 1e-2, 1e-4, 1e-6 with mu = 0.1)."""
-    pressure = [solved(solver=DIRECT, friction={"mu": 0.1, "d_T": d_T})["ram_pressure"] for d_T in (1e-2, 1e-4, 1e-6)]
+    pressure = [solved(solver=DIRECT, friction={"mu": 0.1, "d_T": d_T})["ram_pressure"]
+                for d_T in (1e-2, 1e-4, 1e-6)]
     assert abs(pressure[2] - pressure[1]) < 0.1 * abs(pressure[1] - pressure[0])
     assert abs(pressure[2] - pressure[1]) < 1e-4 * pressure[2]

@@ -12,7 +12,8 @@ from forming_fenicsx.physics.flow_laws import PiecewisePowerLaw, PowerLaw
 def test_piecewise_power_law_branches():
     law = PiecewisePowerLaw(A=2.0, alpha=0.2, rate1=1e-2, rate2=1e2)
     rates = np.array([1e-4, 1e-2, 1.0, 1e2, 1e4])
-    expected = [2.0 * 1e-2**0.2 / 1e-2 * 1e-4, 2.0 * 1e-2**0.2, 2.0, 2.0 * 1e2**0.2, 2.0 * 1e2**0.2 / 1e2 * 1e4]
+    expected = [2.0 * 1e-2**0.2 / 1e-2 * 1e-4, 2.0 * 1e-2**0.2, 2.0, 2.0 * 1e2**0.2,
+                2.0 * 1e2**0.2 / 1e2 * 1e4]
     assert np.allclose(law.flow_stress(rates), expected, rtol=1e-14)
 
 
@@ -29,7 +30,8 @@ def test_power_law_floor():
     assert law.secant(np.array([0.0]))[0] == pytest.approx(3.0 * 1e-4**-0.5, rel=1e-14)
 
 
-@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0), PowerLaw(n=0.3).resolve(1.0)])
+@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0),
+                                 PowerLaw(n=0.3).resolve(1.0)])
 def test_condition_2_10(law):
     """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant
     non-increasing."""
@@ -74,7 +76,8 @@ def test_hardening_curves_and_rate_factors():
     assert hollomon.flow_stress([1.0], 0.0)[0] == pytest.approx(315 * 0.002**0.54, rel=1e-12)
     assert swift.flow_stress([8.0], 0.1)[0] == pytest.approx(500 * 0.12**0.2 * 8.0**0.05, rel=1e-12)
     h = 250 - 150 * math.exp(-0.2 / 0.3)
-    assert voce.flow_stress([10.0], 0.2)[0] == pytest.approx(h * (1 + 0.03 * math.log(100)), rel=1e-12)
+    assert voce.flow_stress([10.0], 0.2)[0] == pytest.approx(h * (1 + 0.03 * math.log(100)),
+                                                             rel=1e-12)
     assert voce.flow_stress([0.01], 0.2)[0] == pytest.approx(h * 0.1**0.03, rel=1e-12)
     assert hollomon.flow_stress([1e3], 0.3)[0] / hollomon.flow_stress([1e-3], 0.3)[0] == \
         pytest.approx(1e6**1e-3, rel=1e-12)  # rate_factor "none": the regularising exponent only
@@ -150,7 +153,8 @@ def test_sellars_tegart_law():
         exact = math.asinh((z / math.exp(22.5)) ** (1 / 5.385)) / 0.040
         assert law.flow_stress([rate])[0] == pytest.approx(exact, rel=1e-12)
     assert law.flow_stress([1.0])[0] == pytest.approx(25.62, abs=0.01)
-    assert law.flow_stress([1.0], temperature=773.15)[0] < law.flow_stress([1.0])[0]  # hotter, softer
+    # hotter, softer
+    assert law.flow_stress([1.0], temperature=773.15)[0] < law.flow_stress([1.0])[0]
     mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 1, 1)
     for rate in (1e-7, 0.3, 30.0):
         value = MPI.COMM_WORLD.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(
@@ -167,7 +171,8 @@ def test_sellars_tegart_law():
             scene(material)
         assert error.value.key == key
     with pytest.raises(SceneError) as error:
-        scene_from_dict({"process": {"kind": "extrusion"}, "units": {"stress": "MPa", "time": "min"},
+        scene_from_dict({"process": {"kind": "extrusion"},
+                         "units": {"stress": "MPa", "time": "min"},
                          "material": {"name": "AA6063", "temperature": 700.0}})
     assert error.value.key == "material.name"
     with pytest.raises(SceneError) as error:

@@ -28,7 +28,8 @@ from conftest import make_scene
 
 QUADRATURE = {"mesh_size": 0.5, "averaging": "quadrature"}
 DEMO = Path(__file__).parents[1] / "demos" / "example1_extrusion.toml"
-DRAWING = {"mesh_size": 0.1, "element": "Q2", "volumetric_integration": "reduced", "averaging": "quadrature"}
+DRAWING = {"mesh_size": 0.1, "element": "Q2", "volumetric_integration": "reduced",
+           "averaging": "quadrature"}
 
 
 def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
@@ -68,7 +69,8 @@ def test_operator_is_the_consistent_tangent_when_the_dual_is_tau_u():
 
 
 def drawing_newton() -> tuple[FlowProblem, NewtonSolver]:
-    scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING, solver={"method": "newton"})
+    scene = make_scene(process={"kind": "drawing"}, discretisation=DRAWING,
+                       solver={"method": "newton"})
     problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     return problem, NewtonSolver(problem)
 
@@ -87,7 +89,8 @@ def test_newton_counts_the_switches_of_the_law_branch_and_the_contact_set():
     problem, newton = drawing_newton()
     comm = problem.comm
     counts = []
-    for value in (lambda x, y: (0 * x, 0 * y), lambda x, y: (0 * x, 0 * y - 1), lambda x, y: (x, -y)):
+    for value in (lambda x, y: (0 * x, 0 * y), lambda x, y: (0 * x, 0 * y - 1),
+                  lambda x, y: (x, -y)):
         set_velocity(problem, value)
         newton.assemble_operator()
         counts.append(newton.count_switches())
@@ -115,15 +118,16 @@ def test_newton_operator_joins_the_previous_iterates_contact_set():
         newton.assemble_operator()
         matrices.append(newton.newton.A.copy())
     du, v = ufl.TrialFunction(problem.V), ufl.TestFunction(problem.V)
-    penalty = dolfinx.fem.form(contact.contact_form(du, v, 1.0, problem.n, problem.scene.penalty.d_N,
-                                                    problem.ds_contact))
+    penalty = dolfinx.fem.form(contact.contact_form(du, v, 1.0, problem.n,
+                                                    problem.scene.penalty.d_N, problem.ds_contact))
     full = dolfinx.fem.petsc.assemble_matrix(penalty, bcs=problem.bcs, diagonal=0.0)
     full.assemble()
     scale = matrices[0].norm()
     matrices[1].axpy(-1.0, matrices[0])
     matrices[1].axpy(-1.0, full)
     assert full.norm() > 1.0  # 1/d_N = 100 (the drawing scene) times a facet mass matrix
-    assert matrices[1].norm() < 1e-15 * scale  # the round-off of the operator's own entries (norm 2e7)
+    # the round-off of the operator's own entries (norm 2e7)
+    assert matrices[1].norm() < 1e-15 * scale
     newton.destroy()
 
 
@@ -171,7 +175,8 @@ def test_newton_q1_reduced_extrusion():
     """Example 1 with Q1 and one-point integration of the penalty (h = 0.25), which Newton could not
     solve while FFCx miscompiled its energy and residual (forms.split_form): measured 10 solves, the
     direct method's ram pressure at delta = 1e-6 to 1e-4 (measured 1.4e-5 apart, as at 1e-7)."""
-    discretisation = {**QUADRATURE, "mesh_size": 0.25, "element": "Q1", "volumetric_integration": "reduced"}
+    discretisation = {**QUADRATURE, "mesh_size": 0.25, "element": "Q1",
+                      "volumetric_integration": "reduced"}
     newton = solve_scene(make_scene(discretisation=discretisation, solver={"method": "newton"}))[2]
     reference = secant_reference(discretisation=discretisation)
     assert newton["converged"] and newton["linear_solves"] <= 12
@@ -193,10 +198,14 @@ def test_parabola_step_is_the_minimiser_between_one_and_two():
     def values(phi):
         return phi(0.0), phi(1.0), phi(2.0)
 
-    assert parabola_step(*values(lambda s: 3.0 * (s - 1.3) ** 2 - 0.7)) == pytest.approx(1.3, rel=1e-12)
-    assert parabola_step(*values(lambda s: -(s - 1.3) ** 2)) is None       # concave: no minimiser
-    assert parabola_step(*values(lambda s: (s - 2.5) ** 2)) is None        # beyond 2: s = 2 is tried anyway
-    assert parabola_step(*values(lambda s: (s - 0.6) ** 2)) is None        # below 1: the full step stays
+    assert (parabola_step(*values(lambda s: 3.0 * (s - 1.3) ** 2 - 0.7))
+            == pytest.approx(1.3, rel=1e-12))
+    # concave: no minimiser
+    assert parabola_step(*values(lambda s: -(s - 1.3) ** 2)) is None
+    # beyond 2: s = 2 is tried anyway
+    assert parabola_step(*values(lambda s: (s - 2.5) ** 2)) is None
+    # below 1: the full step stays
+    assert parabola_step(*values(lambda s: (s - 0.6) ** 2)) is None
 
 
 def minimise(phi, energies: dict[float, float]) -> tuple[float, int]:
@@ -228,7 +237,8 @@ def test_next_trial_stops_without_a_bracket_and_parabola_vertex():
     exact."""
     assert next_trial({0.0: 1.0, 0.5: 0.5, 1.0: 0.2}) is None      # still falling at the longest
     assert next_trial({0.0: 0.0, 0.5: 0.5, 1.0: 2.0}) is None      # rising from 0
-    assert parabola_vertex(0.1, 2.0 * 0.2**2, 0.4, 2.0 * 0.1**2, 1.0, 2.0 * 0.7**2) == pytest.approx(0.3, rel=1e-12)
+    assert (parabola_vertex(0.1, 2.0 * 0.2**2, 0.4, 2.0 * 0.1**2, 1.0, 2.0 * 0.7**2)
+            == pytest.approx(0.3, rel=1e-12))
     assert parabola_vertex(0.0, 0.0, 0.5, 1.0, 1.0, 0.0) is None  # concave
 
 
@@ -251,7 +261,8 @@ def test_newton_cut_steps_end_near_the_minimum_of_phi(monkeypatch):
     assert len(checked) >= 2 and checked[0][0] < 0.1
     for _, energy, shorter, longer in checked:
         assert energy <= min(shorter, longer)
-    cut = [record.step for record in result.history if not np.isnan(record.residual) and record.step < 1.0]
+    cut = [record.step for record in result.history
+           if not np.isnan(record.residual) and record.step < 1.0]
     assert cut == [best for best, *_ in checked]
 
 
@@ -303,7 +314,8 @@ def test_newton_drawing_with_contact_and_friction(mu):
     """Example 2 (Q2 reduced, h = 0.1) with the force criterion: at most 15 solves, q_av and the
     drawing stress of the direct method at delta = 1e-6 to 1e-3."""
     sections = dict(process={"kind": "drawing"}, discretisation=DRAWING, friction={"mu": mu})
-    newton = solve_scene(make_scene(**sections, solver={"method": "newton", "force_tolerance": 1e-3}))[2]
+    newton = solve_scene(make_scene(**sections,
+                                    solver={"method": "newton", "force_tolerance": 1e-3}))[2]
     reference = secant_reference(**sections)
     assert newton["converged"] and newton["linear_solves"] <= 15
     for key in ("mean_die_pressure", "drawing_stress"):
@@ -315,7 +327,8 @@ def test_newton_history_and_scene_check(shared_tmp):
     step (-1 for the secant start and the first Newton step); Newton needs the secant at the Gauss
     points."""
     out = shared_tmp / "newton"
-    run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0}, solver={"method": "newton"}), out)
+    run_scene(make_scene(discretisation={**QUADRATURE, "mesh_size": 1.0},
+                         solver={"method": "newton"}), out)
     MPI.COMM_WORLD.barrier()
     with (out / "history.csv").open() as stream:
         rows = list(csv.DictReader(stream))
@@ -323,17 +336,19 @@ def test_newton_history_and_scene_check(shared_tmp):
     assert newton_rows and all(0 < float(r["step_length"]) <= 2 for r in newton_rows)
     first = len(rows) - len(newton_rows) + 1  # the secant start and the first Newton step
     assert [r["law_switches"] for r in rows[:first]] == ["-1"] * first
-    assert all(int(r["law_switches"]) >= 0 and int(r["contact_switches"]) >= 0 for r in newton_rows[1:])
+    assert all(int(r["law_switches"]) >= 0 and int(r["contact_switches"]) >= 0
+               for r in newton_rows[1:])
     assert float(newton_rows[-1]["relative_increment"]) < 1e-4
     with pytest.raises(SceneError, match="averaging"):
         make_scene(solver={"method": "newton"})
 
 
 @pytest.mark.parametrize("sections", [
-    {"discretisation": {**DRAWING, "mesh_size": 0.2}, "solver": {"method": "newton", "tolerance": 1e-7},
-     "friction": {"mu": 0.2}},
+    {"discretisation": {**DRAWING, "mesh_size": 0.2},
+     "solver": {"method": "newton", "tolerance": 1e-7}, "friction": {"mu": 0.2}},
     {"discretisation": {"mesh_size": 0.2, "element": "Q2", "volumetric_integration": "reduced",
-                        "formulation": "mixed"}, "solver": {"method": "direct"}, "friction": {"mu": 0.2}},
+                        "formulation": "mixed"},
+     "solver": {"method": "direct"}, "friction": {"mu": 0.2}},
 ])
 def test_newton_and_mixed_same_numbers_on_one_and_all_ranks(sections):
     """Under mpirun -n 2 a 2-rank solve against a 1-rank solve of the same drawing scene (dual
@@ -345,7 +360,8 @@ def test_newton_and_mixed_same_numbers_on_one_and_all_ranks(sections):
     parallel = solve_scene(scene, comm=MPI.COMM_WORLD)[2]
     serial = solve_scene(scene, comm=MPI.COMM_SELF)[2]
     assert parallel["converged"] and parallel["linear_solves"] == serial["linear_solves"]
-    for key in ("mean_die_pressure", "drawing_stress", "die_friction_force_x", "force_balance_residual"):
+    for key in ("mean_die_pressure", "drawing_stress", "die_friction_force_x",
+                "force_balance_residual"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6, abs=1e-6), key
 
 

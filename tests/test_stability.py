@@ -15,12 +15,14 @@ ALPHA = 1e-3
 
 def drawing(**sections) -> dict:
     """Example 2's scene (paper constants) on the coarse mesh, mu = 0.2 unless given."""
-    sections["discretisation"] = {"mesh_size": 0.1, "element": "Q2", "volumetric_integration": "reduced",
+    sections["discretisation"] = {"mesh_size": 0.1, "element": "Q2",
+                                  "volumetric_integration": "reduced",
                                   **sections.get("discretisation", {})}
     sections["solver"] = {"method": "direct", "force_tolerance": 1e-3, "max_iterations": 500,
                           **sections.get("solver", {})}
     sections["friction"] = {"mu": 0.2, **sections.get("friction", {})}
-    return solve_scene(make_scene(process={"kind": "drawing", **sections.pop("process", {})}, **sections))[2]
+    return solve_scene(make_scene(process={"kind": "drawing", **sections.pop("process", {})},
+                                  **sections))[2]
 
 
 def test_penalty_d_from_1e_1_to_1e_8():
@@ -32,8 +34,10 @@ def test_penalty_d_from_1e_1_to_1e_8():
     assert stiff["converged"] and stiff["ram_pressure"] == pytest.approx(base, rel=5e-3)
     assert stiff["relative_divergence"] < 1e-6 and not stiff["warnings"]
     soft = solved(penalty={"d": 1e-1})
-    assert soft["iteration_converged"] and soft["relative_divergence"] > 0.5 and not soft["converged"]
-    assert any("the material compresses" in w and "penalty.d = 0.1" in w for w in soft["failed_checks"])
+    assert (soft["iteration_converged"] and soft["relative_divergence"] > 0.5
+            and not soft["converged"])
+    assert any("the material compresses" in w and "penalty.d = 0.1" in w
+               for w in soft["failed_checks"])
     assert solved()["relative_divergence"] < 0.01  # the paper's d = 1e-3: 0.6 %
 
 
@@ -46,8 +50,8 @@ def test_newtonian_alpha_one_first_iterate_is_the_answer():
     second's."""
     increments = {}
     for d_n in (1e-6, 1e-8):
-        scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5}, penalty={"d_N": d_n},
-                           solver={"tolerance": 1e-10})
+        scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5},
+                           penalty={"d_N": d_n}, solver={"tolerance": 1e-10})
         result = solve_scene(scene)[1]
         assert result.converged and result.linear_solves == 3
         increments[d_n] = [record.increment for record in result.history]
@@ -72,8 +76,8 @@ def test_consistent_velocity_scaling_scales_stresses_by_lam_to_the_alpha(lam):
     base = solved(solver={"method": "direct"})
     scale = lam ** (1 - ALPHA)
     scaled = solved(process={"velocity": lam}, material={"rate1": 1e-3 * lam, "rate2": 1e3 * lam},
-                    penalty={"d": 1e-3 * scale, "d_N": 1e-6 * scale}, friction={"d_T": 1e-6 * scale},
-                    solver={"method": "direct"})
+                    penalty={"d": 1e-3 * scale, "d_N": 1e-6 * scale},
+                    friction={"d_T": 1e-6 * scale}, solver={"method": "direct"})
     assert scaled["converged"] and scaled["linear_solves"] == base["linear_solves"]
     assert scaled["ram_pressure"] == pytest.approx(base["ram_pressure"] * lam ** ALPHA, rel=1e-8)
 
@@ -83,8 +87,10 @@ def test_velocity_alone_scaled_down_warns_of_a_weak_penalty():
     thousandfold against 1/d: the material compresses (measured ||div u||/||e(u)|| = 0.92), a failed
     check naming the soft penalty; the work done below rate1 is named too."""
     result = solved(process={"velocity": 1e-3})
-    assert result["iteration_converged"] and not result["converged"] and result["relative_divergence"] > 0.5
-    assert any("the material compresses" in w and "a soft volumetric penalty" in w for w in result["failed_checks"])
+    assert (result["iteration_converged"] and not result["converged"]
+            and result["relative_divergence"] > 0.5)
+    assert any("the material compresses" in w and "a soft volumetric penalty" in w
+               for w in result["failed_checks"])
     assert any("below material.rate1" in w for w in result["warnings"])
 
 
