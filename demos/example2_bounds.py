@@ -32,8 +32,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--sizes", nargs="+", default=["0.05:0.2", "0.025:0.1"],
                         help="element sizes smallest:largest, one bound pair per entry")
-    parser.add_argument("--sides", type=int, default=48, help="sides of the polygons replacing the yield circle")
-    parser.add_argument("--cases", nargs="+", choices=["paper", "exact"], default=["paper", "exact"])
+    parser.add_argument("--sides", type=int, default=48,
+                        help="sides of the polygons replacing the yield circle")
+    parser.add_argument("--cases", nargs="+", choices=["paper", "exact"],
+                        default=["paper", "exact"])
     parser.add_argument("--out", type=Path, default=Path("results/example2_bounds"))
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
@@ -52,13 +54,13 @@ def main() -> None:
             rows.append([name, pair, low.triangles, low.die_pressure, high.die_pressure, reference,
                          low.drawing_stress, high.drawing_stress, low.seconds + high.seconds])
             logging.info("%s", rows[-1])
-    header = ["case", "sizes", "triangles", "lower q", "upper q", "reference q", "lower drawing stress",
-              "upper drawing stress", "seconds"]
-    print(markdown_table(f"Bounds on the frictionless die pressure, k = {k:g}, {args.sides}-sided polygons",
-                         header, rows))
+    header = ["case", "sizes", "triangles", "lower q", "upper q", "reference q",
+              "lower drawing stress", "upper drawing stress", "seconds"]
+    print(markdown_table(f"Bounds on the frictionless die pressure, k = {k:g}, "
+                         f"{args.sides}-sided polygons", header, rows))
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "example2_bounds.json").write_text(json.dumps([dict(zip(header, row, strict=True)) for row in rows],
-                                                              indent=1))
+    (args.out / "example2_bounds.json").write_text(
+        json.dumps([dict(zip(header, row, strict=True)) for row in rows], indent=1))
 
 
 if __name__ == "__main__":

@@ -70,8 +70,10 @@ solver = NewtonSolver(problem, stop=after_solve)
 result = solver.solve()
 # solve 0 is the start and solve 1 is measured against the zero field: the table starts at solve 2
 rows = [[index, f"{record.increment:.2e}", f"{record.step:.3g}", *row]
-        for index, (row, record) in enumerate(zip(rows, result.history[1:], strict=True), start=1)][1:]
+        for index, (row, record) in enumerate(zip(rows, result.history[1:], strict=True),
+                                              start=1)][1:]
 if comm.rank == 0:
-    print(markdown_table(f"{Path(args.scene).stem}, h = {args.mesh_size}: {result.linear_solves} solves, "
+    print(markdown_table(f"{Path(args.scene).stem}, h = {args.mesh_size}: "
+                         f"{result.linear_solves} solves, "
                          f"{'converged' if result.converged else result.reason}",
                          ["solve", "increment", "step", *forms], rows))
