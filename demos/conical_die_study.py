@@ -2,8 +2,9 @@
 Avitzur (friction factor m) over die semi-angles, reductions and friction (docs/conical_dies.md).
 
 Axisymmetric, the paper's law (4.5) with A = 1 (nearly rate-independent: sigma0 = sigma_p at the
-process rate), no land, default mesh (Q2). Writes results/conical_dies.json, docs/conical_dies.md and
-docs/conical_dies.png. Run: .venv/bin/python demos/conical_die_study.py (about 5 minutes, 1 core).
+process rate), no land, default mesh (Q2). Writes results/conical_dies.json, docs/conical_dies.md
+and docs/conical_dies.png. Run: .venv/bin/python demos/conical_die_study.py (about 5 minutes, 1
+core).
 """
 from __future__ import annotations
 
@@ -60,7 +61,8 @@ def warning_name(row: dict) -> str:
     """A short name for the run's sanity warnings."""
     names = {"crosses the free surfaces": "free surface crossed",
              "yield stress in tension": "product near yield"}
-    return ", ".join(short for text in row["warnings"] for key, short in names.items() if key in text)
+    return ", ".join(short for text in row["warnings"] for key, short in names.items()
+                     if key in text)
 
 
 def schey_factor(row: dict) -> float:
@@ -90,15 +92,16 @@ def figure(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(1, len(REDUCTIONS), figsize=(15, 4.5), sharey=False)
     for ax, reduction in zip(axes, REDUCTIONS, strict=True):
         for (law, value), colour in zip(FRICTION, ("k", "C0", "C1", "C2", "C3"), strict=True):
-            line = [r for r in rows if r["reduction"] == reduction and (r["law"], r["value"]) == (law, value)]
+            line = [r for r in rows
+                    if r["reduction"] == reduction and (r["law"], r["value"]) == (law, value)]
             name = f"mu = {value:g}" if law == "coulomb" else f"m = {value:g}"
             ax.plot([r["angle"] for r in line], [r["fe"] for r in line], "-", color=colour)
             ax.plot([r["angle"] for r in line if trusted(r)], [r["fe"] for r in line if trusted(r)],
                     "o", color=colour, label=f"FE {name}")
             ax.plot([r["angle"] for r in line if not trusted(r)],
                     [r["fe"] for r in line if not trusted(r)], "o", mfc="none", color=colour)
-            ax.plot([r["angle"] for r in line], [r["closed_form"] for r in line], "--", color=colour,
-                    label=("Sachs " if law == "coulomb" else "Avitzur ") + name)
+            ax.plot([r["angle"] for r in line], [r["closed_form"] for r in line], "--",
+                    color=colour, label=("Sachs " if law == "coulomb" else "Avitzur ") + name)
         ax.set_title(f"reduction of area {reduction:.0%}")
         ax.set_xlabel("die semi-angle [deg]")
         ax.set_ylabel("drawing stress / flow stress")

@@ -25,7 +25,8 @@ from forming_fenicsx.app.run import run_scene
 HILL_RAM_PRESSURE = 1.0 + math.pi / 2.0  # slip-line solution, in units of k
 
 parser = argparse.ArgumentParser(description=__doc__)
-parser.add_argument("scene", nargs="?", default=str(Path(__file__).with_name("example1_extrusion.toml")))
+parser.add_argument("scene", nargs="?",
+                    default=str(Path(__file__).with_name("example1_extrusion.toml")))
 parser.add_argument("--out", help="output folder (default: results/<scene name>)")
 parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
 args = parser.parse_args()
@@ -42,16 +43,20 @@ except SceneError as error:
 
 # ## Solve and write results
 # The mesh is built by gmsh on rank 0 and distributed; the secant-modulus iteration runs until the
-# relative increment falls below delta; results go to summary.json, history.csv, fields.xdmf and PNGs.
+# relative increment falls below delta; results go to summary.json, history.csv, fields.xdmf and
+# PNGs.
 out = Path(args.out) if args.out else Path("results") / Path(args.scene).stem
-summary = run_scene(scene, out, title=Path(args.scene).stem, overwrite=True)  # a re-run replaces its results
+# a re-run replaces its results
+summary = run_scene(scene, out, title=Path(args.scene).stem, overwrite=True)
 
 # ## Compare with the slip-line solution
 # The ram pressure is the consistent reaction on Gamma1 over the inlet half-height.
 if MPI.COMM_WORLD.rank == 0:
     p = summary["ram_pressure"]
-    print(f"mu = {scene.friction.mu}: ram pressure {p:.4f} (Hill, frictionless: {HILL_RAM_PRESSURE:.4f}; "
-          f"{100 * (p / HILL_RAM_PRESSURE - 1):+.2f}%), p_av {summary['mean_hydrostatic_pressure']:.4f}, "
+    print(f"mu = {scene.friction.mu}: ram pressure {p:.4f} "
+          f"(Hill, frictionless: {HILL_RAM_PRESSURE:.4f}; "
+          f"{100 * (p / HILL_RAM_PRESSURE - 1):+.2f}%), "
+          f"p_av {summary['mean_hydrostatic_pressure']:.4f}, "
           f"force balance residual {summary['force_balance_residual']:.1e}, "
           f"{summary['linear_solves']} linear solves, converged: {summary['converged']}")
     print(f"results in {out}")

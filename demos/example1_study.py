@@ -1,6 +1,7 @@
 # # Example 1 measured: mesh convergence, the penalty's effect on p_av, and the two secant methods
 #
-#     mpirun -n 2 python demos/example1_study.py [--sizes 0.5 0.25 0.125 0.0625] [--out results/example1_study]
+#     mpirun -n 2 python demos/example1_study.py [--sizes 0.5 0.25 0.125 0.0625]
+#                                                [--out results/example1_study]
 #
 # Prints three tables (markdown) and writes them as JSON. docs/example1.md shows one run of it.
 
@@ -54,11 +55,14 @@ if len(results["mesh"]) >= 3:
     results["extrapolated_ram_pressure"] = {"value": limit, "order": order, "hill": HILL,
                                             "relative_error": limit / HILL - 1}
     table(f"Ram pressure, mu = 0, Q2 reduced, grading {args.grading} (Hill {HILL:.4f})",
-          ["h", "dofs", "ram pressure", "error vs Hill", "p_av", "force balance", "linear solves", "wall s"],
-          [[r["mesh_size"], r["dofs"], r["ram_pressure"], f"{100 * (r['ram_pressure'] / HILL - 1):+.2f}%",
-            r["mean_hydrostatic_pressure"], f"{r['force_balance_residual']:.1e}", r["linear_solves"],
+          ["h", "dofs", "ram pressure", "error vs Hill", "p_av", "force balance", "linear solves",
+           "wall s"],
+          [[r["mesh_size"], r["dofs"], r["ram_pressure"],
+            f"{100 * (r['ram_pressure'] / HILL - 1):+.2f}%", r["mean_hydrostatic_pressure"],
+            f"{r['force_balance_residual']:.1e}", r["linear_solves"],
             round(r["wall_time_s"], 1)] for r in results["mesh"]]
-          + [["extrapolated", "", limit, f"{100 * (limit / HILL - 1):+.2f}%", f"order {order:.2f}", "", "", ""]])
+          + [["extrapolated", "", limit, f"{100 * (limit / HILL - 1):+.2f}%", f"order {order:.2f}",
+              "", "", ""]])
 
 # ## 2. p_av against the penalty d (mu = 0, h = 0.25)
 scene = load_scene(args.scene)
@@ -68,9 +72,10 @@ for d in args.penalties if "penalty" in args.parts else []:
     model = ram_face_pressure_model(law, d, s["ram_pressure"])
     results["penalty"].append({"d": d, "rigid_zone_model": model, **s})
 table("p_av on the ram face against d (h = 0.25)",
-      ["d", "ram pressure", "p_av", "rigid-zone model of p_av", "L2 norm of div u", "linear solves"],
-      [[r["d"], r["ram_pressure"], r["mean_hydrostatic_pressure"], r["rigid_zone_model"], r["divergence_l2"],
-        r["linear_solves"]] for r in results["penalty"]])
+      ["d", "ram pressure", "p_av", "rigid-zone model of p_av", "L2 norm of div u",
+       "linear solves"],
+      [[r["d"], r["ram_pressure"], r["mean_hydrostatic_pressure"], r["rigid_zone_model"],
+        r["divergence_l2"], r["linear_solves"]] for r in results["penalty"]])
 
 # ## 3. Direct (3.13) and modified (3.33) methods at delta = 1e-4, demo mesh
 for mu in (0.0, 0.1) if "methods" in args.parts else []:
@@ -78,41 +83,51 @@ for mu in (0.0, 0.1) if "methods" in args.parts else []:
         s = run(f"friction.mu={mu}", f"solver.method={method}")
         results["methods"].append({"mu": mu, "method": method, **s})
 table("Secant-modulus methods, delta = 1e-4, demo scene mesh",
-      ["mu", "method", "linear solves", "outer iterations", "wall s", "ram pressure", "force balance"],
+      ["mu", "method", "linear solves", "outer iterations", "wall s", "ram pressure",
+       "force balance"],
       [[r["mu"], r["method"], r["linear_solves"], r["outer_iterations"], round(r["wall_time_s"], 1),
         r["ram_pressure"], f"{r['force_balance_residual']:.1e}"] for r in results["methods"]])
 
 # ## 4. The stopping tolerance delta and the force balance (mu = 0.1, h = 0.25)
 for tolerance in (1e-4, 1e-5, 1e-6) if "tolerance" in args.parts else []:
     for method in ("direct", "modified"):
-        s = run("discretisation.mesh_size=0.25", grading, "friction.mu=0.1", f"solver.method={method}",
-                f"solver.tolerance={tolerance}", "solver.max_iterations=5000")
+        s = run("discretisation.mesh_size=0.25", grading, "friction.mu=0.1",
+                f"solver.method={method}", f"solver.tolerance={tolerance}",
+                "solver.max_iterations=5000")
         results["tolerance"].append({"tolerance": tolerance, "method": method, **s})
 table("Stopping tolerance against force balance (mu = 0.1, h = 0.25)",
-      ["delta", "method", "linear solves", "outer iterations", "ram pressure", "die friction force x",
-       "force balance"],
+      ["delta", "method", "linear solves", "outer iterations", "ram pressure",
+       "die friction force x", "force balance"],
       [[r["tolerance"], r["method"], r["linear_solves"], r["outer_iterations"], r["ram_pressure"],
-        r["die_friction_force_x"], f"{r['force_balance_residual']:.1e}"] for r in results["tolerance"]])
+        r["die_friction_force_x"], f"{r['force_balance_residual']:.1e}"]
+       for r in results["tolerance"]])
 
 # ## 5. Elements and volumetric quadrature (mu = 0, h = 0.25, direct method)
 variants = [("Q2", "reduced", "nodes"), ("Q2", "reduced", "centres"), ("Q2", "complete", "nodes"),
             ("Q1", "reduced", "nodes"), ("Q1", "complete", "nodes")]
 for element, quadrature, averaging in variants if "elements" in args.parts else []:
-    s = run("discretisation.mesh_size=0.25", grading, "solver.method=direct", f"discretisation.element={element}",
-            f"discretisation.volumetric_integration={quadrature}", f"discretisation.averaging={averaging}")
+    s = run("discretisation.mesh_size=0.25", grading, "solver.method=direct",
+            f"discretisation.element={element}",
+            f"discretisation.volumetric_integration={quadrature}",
+            f"discretisation.averaging={averaging}")
     results["elements"].append({"element": element, "volumetric_integration": quadrature,
                                 "averaging": averaging, **s})
 table("Elements, volumetric quadrature and averaging (mu = 0, h = 0.25, grading 8)",
-      ["element", "volumetric", "averaging", "dofs", "ram pressure", "error vs Hill", "linear solves"],
+      ["element", "volumetric", "averaging", "dofs", "ram pressure", "error vs Hill",
+       "linear solves"],
       [[r["element"], r["volumetric_integration"], r["averaging"], r["dofs"], r["ram_pressure"],
-        f"{100 * (r['ram_pressure'] / HILL - 1):+.2f}%", r["linear_solves"]] for r in results["elements"]])
+        f"{100 * (r['ram_pressure'] / HILL - 1):+.2f}%", r["linear_solves"]]
+       for r in results["elements"]])
 
 # ## 6. The friction regularisation d_T -> 0 (mu = 0.1, h = 0.5, direct method)
 for d_T in (1e-1, 1e-2, 1e-3, 1e-4, 1e-6) if "regularisation" in args.parts else []:
-    s = run("discretisation.mesh_size=0.5", grading, "friction.mu=0.1", "solver.method=direct", f"friction.d_T={d_T}")
+    s = run("discretisation.mesh_size=0.5", grading, "friction.mu=0.1", "solver.method=direct",
+            f"friction.d_T={d_T}")
     results["regularisation"].append({"d_T": d_T, **s})
-table("Friction regularisation (mu = 0.1, h = 0.5)", ["d_T", "ram pressure", "die friction force x", "linear solves"],
-      [[r["d_T"], r["ram_pressure"], r["die_friction_force_x"], r["linear_solves"]] for r in results["regularisation"]])
+table("Friction regularisation (mu = 0.1, h = 0.5)",
+      ["d_T", "ram pressure", "die friction force x", "linear solves"],
+      [[r["d_T"], r["ram_pressure"], r["die_friction_force_x"], r["linear_solves"]]
+       for r in results["regularisation"]])
 
 if rank0:
     out = Path(args.out)

@@ -26,17 +26,21 @@ from forming_fenicsx.core.richardson import richardson
 from forming_fenicsx.app.run import solve_scene
 
 DEMOS = Path(__file__).parent
-CASES = [("Example 1, h = 0.25", DEMOS / "example1_extrusion.toml", ["discretisation.mesh_size=0.25"], 1e-3),
-         ("Example 1, h = 0.125", DEMOS / "example1_extrusion.toml", ["discretisation.mesh_size=0.125"], 1e-3),
+CASES = [("Example 1, h = 0.25", DEMOS / "example1_extrusion.toml",
+          ["discretisation.mesh_size=0.25"], 1e-3),
+         ("Example 1, h = 0.125", DEMOS / "example1_extrusion.toml",
+          ["discretisation.mesh_size=0.125"], 1e-3),
          ("Example 2, mu = 0.2, h = 0.05", DEMOS / "example2_drawing_mu02.toml",
-          ["discretisation.mesh_size=0.05", "discretisation.element=Q2", "discretisation.volumetric_integration=reduced"],
+          ["discretisation.mesh_size=0.05", "discretisation.element=Q2",
+           "discretisation.volumetric_integration=reduced"],
           5e-3)]
 COMMON = ["solver.method=direct", "solver.force_tolerance=1e-3", "solver.max_iterations=1000",
           "output.fields=false", "output.figures=false"]
 
 
 def pressure_means(problem) -> np.ndarray:
-    """Element means of -sigma_H, gathered on every rank in cell order of the original mesh input."""
+    """Element means of -sigma_H, gathered on every rank in cell order of the original mesh
+    input."""
     means = cell_means(problem.mesh, -problem.hydrostatic_stress(), "pressure", problem.full_degree)
     cells = problem.mesh.topology.index_map(problem.mesh.topology.dim).size_local
     original = problem.mesh.topology.original_cell_index[:cells]
@@ -57,18 +61,21 @@ def main() -> None:
     rank0 = MPI.COMM_WORLD.rank == 0
     rows = []
     for title, scene_file, settings, d0 in CASES:
-        problem, _, mixed = solve_scene(load_scene(scene_file, [*settings, *COMMON, "discretisation.formulation=mixed"]))
+        problem, _, mixed = solve_scene(load_scene(scene_file, [*settings, *COMMON,
+                                                                "discretisation.formulation=mixed"]))
         reference = pressure_means(problem)
         quantity = "ram_pressure" if "ram_pressure" in mixed else "mean_die_pressure"
         case_rows = []
         for d in (d0, d0 / 10, d0 / 100, d0 / 1000, d0 / 10000):
-            problem, _, summary = solve_scene(load_scene(scene_file, [*settings, *COMMON, f"penalty.d={d}"]))
+            problem, _, summary = solve_scene(load_scene(scene_file,
+                                                         [*settings, *COMMON, f"penalty.d={d}"]))
             field = pressure_means(problem)
             difference = np.sqrt(np.sum(reference[:, 1] * (field[:, 0] - reference[:, 0]) ** 2)
                                  / np.sum(reference[:, 1] * reference[:, 0] ** 2))
-            case_rows.append({"case": title, "formulation": "penalty", "d": d, **summary, "field_difference": difference})
-        # O(d): the limit from the three smallest d (the extrapolation needs no particular ratio), or the
-        # smallest d's value where rounding makes the differences non-monotone
+            case_rows.append({"case": title, "formulation": "penalty", "d": d, **summary,
+                              "field_difference": difference})
+        # O(d): the limit from the three smallest d (the extrapolation needs no particular ratio),
+        # or the smallest d's value where rounding makes the differences non-monotone
         limit = richardson([r["d"] for r in case_rows], [r[quantity] for r in case_rows])[0]
         limit = limit if np.isfinite(limit) else case_rows[-1][quantity]
         mixed.update(case=title, formulation="mixed", d=0.0, field_difference=0.0)
@@ -80,11 +87,13 @@ def main() -> None:
         row.pop("scene", None)
     if rank0:
         print(markdown_table(
-            "Mixed against penalty (the penalty limit d -> 0 extrapolated from the three smallest d)",
-            ["case", "formulation", "d", "quantity", "value", "vs penalty limit", "L2 norm of div u", "p_av",
-             "pressure field vs mixed", "linear solves", "dofs"],
-            [[r["case"], r["formulation"], r["d"], r["quantity"], r["value"], f"{100 * r['vs_penalty_limit']:+.3f}%",
-              f"{r['divergence_l2']:.2e}", r.get("mean_hydrostatic_pressure", ""), f"{r['field_difference']:.2e}",
+            "Mixed against penalty "
+            "(the penalty limit d -> 0 extrapolated from the three smallest d)",
+            ["case", "formulation", "d", "quantity", "value", "vs penalty limit",
+             "L2 norm of div u", "p_av", "pressure field vs mixed", "linear solves", "dofs"],
+            [[r["case"], r["formulation"], r["d"], r["quantity"], r["value"],
+              f"{100 * r['vs_penalty_limit']:+.3f}%", f"{r['divergence_l2']:.2e}",
+              r.get("mean_hydrostatic_pressure", ""), f"{r['field_difference']:.2e}",
               r["linear_solves"], r["dofs"]] for r in rows]))
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)

@@ -5,11 +5,12 @@
 # Newton's steps converge fast only once the points on each side of every kink of the operator have
 # settled. After each linear solve this prints the relative increment and, against the previous
 # iterate: the area of Gauss points whose rate crossed rate1 (the kink of (4.5) between the linear
-# branch of the rigid zones and the power law, where the tangent stiffness drops by the factor alpha),
-# the area that crossed rate2, and the length of die face whose contact state (u_N > 0, (3.4)) changed.
-# docs/solvers.md shows a run on Example 1 at 242k unknowns. Every Newton run's history.csv counts
-# the same switches (Gauss points across the kinks of the law, die nodes in and out of contact) per
-# step; this script weighs them as areas and lengths, and separates rate1 from rate2.
+# branch of the rigid zones and the power law, where the tangent stiffness drops by the factor
+# alpha), the area that crossed rate2, and the length of die face whose contact state (u_N > 0,
+# (3.4)) changed. docs/solvers.md shows a run on Example 1 at 242k unknowns. Every Newton run's
+# history.csv counts the same switches (Gauss points across the kinks of the law, die nodes in and
+# out of contact) per step; this script weighs them as areas and lengths, and separates rate1 from
+# rate2.
 
 import argparse
 from pathlib import Path
@@ -69,8 +70,10 @@ solver = NewtonSolver(problem, stop=after_solve)
 result = solver.solve()
 # solve 0 is the start and solve 1 is measured against the zero field: the table starts at solve 2
 rows = [[index, f"{record.increment:.2e}", f"{record.step:.3g}", *row]
-        for index, (row, record) in enumerate(zip(rows, result.history[1:], strict=True), start=1)][1:]
+        for index, (row, record) in enumerate(zip(rows, result.history[1:], strict=True),
+                                              start=1)][1:]
 if comm.rank == 0:
-    print(markdown_table(f"{Path(args.scene).stem}, h = {args.mesh_size}: {result.linear_solves} solves, "
+    print(markdown_table(f"{Path(args.scene).stem}, h = {args.mesh_size}: "
+                         f"{result.linear_solves} solves, "
                          f"{'converged' if result.converged else result.reason}",
                          ["solve", "increment", "step", *forms], rows))

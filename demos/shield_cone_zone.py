@@ -3,10 +3,11 @@ ln(A0/A) in the middle of a long conical die, beside Shield's c/2 (closed_forms.
 reference section 2) and Avitzur's cone terms (docs/conical_dies.md).
 
 Axisymmetric extrusion (the product cannot yield, so the cone may be long) of a bar of radius 1 to
-0.5 (75 % reduction of area; 0.25 for the short cones of 15 and 30 degrees too) through dies of 5 to 30 degrees with friction factor m, the paper's
-law (4.5) with A = 1 (nearly rate-independent), Newton. The slope is the least-squares fit of the
-section mean of sigma_xx (sections.mean_axial_stress) against ln(A0/A(x)) over the middle half of
-the cone. Writes results/shield_cone_zone.json and .md.
+0.5 (75 % reduction of area; 0.25 for the short cones of 15 and 30 degrees too) through dies of 5 to
+30 degrees with friction factor m, the paper's law (4.5) with A = 1 (nearly rate-independent),
+Newton. The slope is the least-squares fit of the section mean of sigma_xx
+(sections.mean_axial_stress) against ln(A0/A(x)) over the middle half of the cone. Writes
+results/shield_cone_zone.json and .md.
 Run: .venv/bin/python demos/shield_cone_zone.py (about 4 minutes, 1 core).
 """
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Shared fixtures; every test runs serially and under ``mpirun -n 2 python -m mpi4py -m pytest``."""
+"""Shared fixtures; every test runs serially and under
+``mpirun -n 2 python -m mpi4py -m pytest``."""
 from __future__ import annotations
 
 import json
@@ -27,7 +28,8 @@ NO_PARALLEL_CONTENT = "no_parallel_content"
 
 def pytest_configure(config):
     config.addinivalue_line("markers", f"{NO_PARALLEL_CONTENT}: the same serial work on any number "
-                            "of ranks (pure Python or a child process): run in the serial phase only")
+                            "of ranks (pure Python or a child process): "
+                            "run in the serial phase only")
     _remember_compiled_modules()
 
 
@@ -92,11 +94,13 @@ def shared_tmp(tmp_path: Path) -> Path:
     return Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0))
 
 
-# The paper's absolute penalties of Examples 1 and 2 and its pure penalty contact, which the tests of
-# the paper's examples were written for; a test that names a penalty (absolute or relative) replaces
-# the paper's value.
-PAPER_PENALTIES = {"extrusion": {"penalty": {"d": 1e-3, "d_N": 1e-6, "augmented": False}, "friction": {"d_T": 1e-6}},
-                   "drawing": {"penalty": {"d": 5e-3, "d_N": 1e-2, "augmented": False}, "friction": {"d_T": 1e-6}}}
+# The paper's absolute penalties of Examples 1 and 2 and its pure penalty contact, which the tests
+# of the paper's examples were written for; a test that names a penalty (absolute or relative)
+# replaces the paper's value.
+PAPER_PENALTIES = {"extrusion": {"penalty": {"d": 1e-3, "d_N": 1e-6, "augmented": False},
+                                 "friction": {"d_T": 1e-6}},
+                   "drawing": {"penalty": {"d": 5e-3, "d_N": 1e-2, "augmented": False},
+                               "friction": {"d_T": 1e-6}}}
 
 
 def make_scene(**sections) -> Scene:

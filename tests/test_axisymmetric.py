@@ -32,8 +32,8 @@ RADIAL_CELLS = (4, 8, 16)
 @pytest.mark.parametrize("n", [0.2, 1.0])
 @pytest.mark.parametrize("symmetry", ["axisymmetric", "plane_strain"])
 def test_radial_flow_orders(symmetry, n, element):
-    """Velocity errors fall at the orders of Q_k (L2: k + 1, H1: k) between the meshes of 4, 8 and 16
-    elements across the die angle, and the mean axial stress on the exit cap (the drawing stress)
+    """Velocity errors fall at the orders of Q_k (L2: k + 1, H1: k) between the meshes of 4, 8 and
+    16 elements across the die angle, and the mean axial stress on the exit cap (the drawing stress)
     converges to the exact sigma_rr(rho1): within 5e-4 on the finest mesh (measured: 4.8e-5 to
     2.3e-4). The law's extremes n = 0.2 and 1 (Newtonian); n = 0.5 between them was dropped for
     the suite's time: its orders lay within theirs in all four cases (L2 1.95 to 3.12, H1 0.96 to
@@ -52,13 +52,15 @@ def test_radial_flow_orders(symmetry, n, element):
 def test_round_product_keys():
     """A round product has diameters; a strip has thicknesses: the other key is refused by name."""
     with pytest.raises(SceneError, match="geometry.entry_thickness"):
-        make_scene(process={"kind": "drawing"}, geometry={"symmetry": "axisymmetric", "entry_thickness": 2.0})
+        make_scene(process={"kind": "drawing"},
+                   geometry={"symmetry": "axisymmetric", "entry_thickness": 2.0})
     with pytest.raises(SceneError, match="geometry.exit_diameter"):
         make_scene(process={"kind": "drawing"}, geometry={"exit_diameter": 1.5})
     with pytest.raises(SceneError, match="geometry.symmetry"):
         make_scene(geometry={"symmetry": "axial"})
     scene = make_scene(process={"kind": "drawing"},
-                       geometry={"symmetry": "axisymmetric", "entry_diameter": 2.0, "exit_diameter": 1.8})
+                       geometry={"symmetry": "axisymmetric", "entry_diameter": 2.0,
+                                 "exit_diameter": 1.8})
     assert (scene.geometry.entry_thickness, scene.geometry.exit_thickness) == (2.0, 1.8)
     with pytest.raises(SceneError, match="geometry.symmetry"):
         strip_triangulation(scene.geometry, 0.1, 0.2)

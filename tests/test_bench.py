@@ -14,7 +14,8 @@ from forming_fenicsx.app.bench import compare, median_run, run_case
 def test_run_case_in_process_gives_a_full_row():
     row = run_case({"example": 1, "mesh_size": 1.0, "method": "newton"})
     assert row["converged"] and row["ranks"] == MPI.COMM_WORLD.size and row["linear_solves"] <= 15
-    split = sum(row[f"{key}_s"] for key in ("setup", "assembly", "factorisation", "solve", "rest", "postprocess"))
+    split = sum(row[f"{key}_s"] for key in ("setup", "assembly", "factorisation", "solve", "rest",
+                                            "postprocess"))
     assert abs(split - row["wall_time_s"]) < 0.1 * row["wall_time_s"]  # the parts cover the run
     assert row["factorisation_s"] > 0 and row["peak_memory_mb"] > 50
     assert row["exact"] is not None and abs(row["value"] / row["exact"] - 1) < 0.2
@@ -25,34 +26,44 @@ def test_bench_command_launches_each_case_and_compares(shared_tmp):
     """The parent (outside any MPI job) launches the cases under mpirun and compares them."""
     out = shared_tmp / "bench.json"
     if MPI.COMM_WORLD.rank == 0:
-        env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
+        env = {k: v for k, v in os.environ.items()
+               if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                   OMPI_MCA_rmaps_base_oversubscribe="1", PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
-        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "bench", "--examples", "1", "--sizes",
-                               "1.0", "--methods", "direct", "newton", "--repeat", "2", "--out", str(out)],
+                   OMPI_MCA_rmaps_base_oversubscribe="1",
+                   PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "bench",
+                               "--examples", "1", "--sizes", "1.0", "--methods", "direct", "newton",
+                               "--repeat", "2", "--out", str(out)],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
-        assert "| example | h | ranks | symmetry | formulation | method | converged |" in done.stdout
-        order = [(line.split(":")[0], line.split(", ")[-2].split(":")[0]) for line in done.stdout.splitlines()
+        assert ("| example | h | ranks | symmetry | formulation | method | converged |"
+                in done.stdout)
+        order = [(line.split(":")[0], line.split(", ")[-2].split(":")[0])
+                 for line in done.stdout.splitlines()
                  if line.startswith("run ")]  # rounds: every case once, then again
-        assert order == [("run 1/2", "direct"), ("run 1/2", "newton"), ("run 2/2", "direct"), ("run 2/2", "newton")]
+        assert order == [("run 1/2", "direct"), ("run 1/2", "newton"),
+                         ("run 2/2", "direct"), ("run 2/2", "newton")]
     MPI.COMM_WORLD.barrier()
     rows = {r["method"]: r for r in json.loads(out.read_text())}
     assert rows["newton"]["linear_solves"] < rows["direct"]["linear_solves"]
     assert rows["newton"]["vs_direct"] < 1e-3 and rows["direct"]["vs_direct"] == 0
     for row in rows.values():  # two runs each, the faster kept (the lower middle of two)
-        assert len(row["wall_time_runs_s"]) == 2 and row["wall_time_s"] == min(row["wall_time_runs_s"])
+        assert (len(row["wall_time_runs_s"]) == 2
+                and row["wall_time_s"] == min(row["wall_time_runs_s"]))
 
 
 def test_median_run_keeps_the_middle_run_and_every_time():
     runs = [{"wall_time_s": t, "linear_solves": n} for t, n in ((3.0, 7), (1.0, 8), (2.0, 9))]
     row = median_run(runs)
-    assert row["wall_time_s"] == 2.0 and row["linear_solves"] == 9 and row["wall_time_runs_s"] == [3.0, 1.0, 2.0]
+    assert (row["wall_time_s"] == 2.0 and row["linear_solves"] == 9
+            and row["wall_time_runs_s"] == [3.0, 1.0, 2.0])
 
 
 def test_compare_against_direct_and_one_rank():
-    rows = [{"example": 1, "mesh_size": 0.5, "method": m, "ranks": r, "value": v, "exact": 2.0, "wall_time_s": t}
-            for m, r, v, t in (("direct", 1, 2.2, 8.0), ("newton", 1, 2.2022, 2.0), ("newton", 2, 2.2022, 1.0))]
+    rows = [{"example": 1, "mesh_size": 0.5, "method": m, "ranks": r, "value": v, "exact": 2.0,
+             "wall_time_s": t}
+            for m, r, v, t in (("direct", 1, 2.2, 8.0), ("newton", 1, 2.2022, 2.0),
+                               ("newton", 2, 2.2022, 1.0))]
     compare(rows)
     assert abs(rows[1]["vs_direct"] - 1e-3) < 1e-12
     assert rows[1]["speedup_vs_direct"] == 4.0 and rows[2]["speedup_vs_1_rank"] == 2.0
@@ -60,7 +71,8 @@ def test_compare_against_direct_and_one_rank():
 
 
 def test_compare_axisymmetric_against_plane_strain():
-    rows = [{"example": 2, "mesh_size": 0.05, "method": "newton", "ranks": 1, "symmetry": s, "value": 1.0,
-             "exact": None, "wall_time_s": t} for s, t in (("plane_strain", 2.0), ("axisymmetric", 2.5))]
+    rows = [{"example": 2, "mesh_size": 0.05, "method": "newton", "ranks": 1, "symmetry": s,
+             "value": 1.0, "exact": None, "wall_time_s": t}
+            for s, t in (("plane_strain", 2.0), ("axisymmetric", 2.5))]
     compare(rows)
     assert rows[1]["time_vs_plane_strain"] == 1.25 and rows[0]["time_vs_plane_strain"] is None

@@ -52,12 +52,13 @@ def test_die_coordinate_is_the_arc_length():
 
 def test_two_angle_die_corners():
     """An entry cone at 20 deg over 0.3, then the 8 deg working cone to the exit size."""
-    profile = parametric_profile(1.0, 1.0, 0.7, 8.0, 0.0, second_angle=20.0, second_angle_length=0.3)
+    profile = parametric_profile(1.0, 1.0, 0.7, 8.0, 0.0, second_angle=20.0,
+                                 second_angle_length=0.3)
     first, second = profile.segments
     drop = 0.3 * math.tan(math.radians(20.0))
     assert first.end == pytest.approx((1.3, 1.0 - drop), rel=1e-14)
-    assert second.end[0] - second.start[0] == pytest.approx((0.3 - drop) / math.tan(math.radians(8.0)),
-                                                            rel=1e-12)
+    assert second.end[0] - second.start[0] == pytest.approx(
+        (0.3 - drop) / math.tan(math.radians(8.0)), rel=1e-12)
     assert 8.0 < profile.effective_angle < 20.0
 
 
@@ -124,7 +125,8 @@ def test_csv_profile_refusals_name_the_key_and_row(tmp_path, rows, message):
     path = tmp_path / "die.csv"
     path.write_text(rows)
     with pytest.raises(SceneError, match=message) as error:
-        scene_from_dict({"process": {"kind": "drawing"}, "geometry": {"die_profile_file": str(path)}})
+        scene_from_dict({"process": {"kind": "drawing"},
+                         "geometry": {"die_profile_file": str(path)}})
     assert error.value.key == "geometry.die_profile_file"
 
 
@@ -138,8 +140,9 @@ def test_csv_profile_refusals_name_the_key_and_row(tmp_path, rows, message):
     ({"second_angle": 95.0, "second_angle_length": 0.01}, "geometry.second_angle"),
 ])
 def test_profile_keys_are_checked(geometry, key):
-    """Refusals name the key: a parametric key beside a profile file, an entry radius or a second cone that does not fit, a
-    die kind drawing does not have, Example 1's key on a conical die, an angle out of range."""
+    """Refusals name the key: a parametric key beside a profile file, an entry radius or a second
+    cone that does not fit, a die kind drawing does not have, Example 1's key on a conical die, an
+    angle out of range."""
     with pytest.raises(SceneError) as error:
         scene_from_dict({"process": {"kind": "drawing"}, "geometry": geometry})
     assert error.value.key == key
@@ -154,9 +157,9 @@ def test_square_die_keys_stay_apart():
 @pytest.mark.parametrize("symmetry", ["axisymmetric", "plane_strain"])
 def test_conical_extrusion_ram_pressure(symmetry, tmp_path):
     """A 10 -> 6 billet through a 30 deg die with an entry radius and friction factor 0.3 (Newton,
-    coarse Q2): converged in at most 15 solves; the ram pressure over the flow stress above the ideal
-    work (ln(A0/A1), or 2/sqrt3 ln(h0/h1) in plane strain) and below three times it; die.csv and
-    die.png written with the profile's x and y."""
+    coarse Q2): converged in at most 15 solves; the ram pressure over the flow stress above the
+    ideal work (ln(A0/A1), or 2/sqrt3 ln(h0/h1) in plane strain) and below three times it; die.csv
+    and die.png written with the profile's x and y."""
     ends = "diameter" if symmetry == "axisymmetric" else "thickness"
     scene = scene_from_dict({
         "process": {"kind": "extrusion", "velocity": 1.0},
@@ -201,7 +204,8 @@ def cosine_die(path, segments: int) -> None:
     x = np.append(3.0 + 1.17 * t, 4.57)
     y = np.append(0.8 + 0.1 * (1 + np.cos(np.pi * t)), 0.8)
     if MPI.COMM_WORLD.rank == 0:
-        path.write_text("x,y\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(x, y, strict=True)))
+        path.write_text("x,y\n" + "".join(f"{a:.17g},{b:.17g}\n"
+                                          for a, b in zip(x, y, strict=True)))
     MPI.COMM_WORLD.barrier()
 
 

@@ -1,5 +1,5 @@
-"""Example 2 (drawing through a 6 degree die) on a coarse mesh: bounds, contact set, friction, the force
-balance, die.csv, and the same numbers on 1 and 2 ranks."""
+"""Example 2 (drawing through a 6 degree die) on a coarse mesh: bounds, contact set, friction, the
+force balance, die.csv, and the same numbers on 1 and 2 ranks."""
 import csv
 import json
 import math
@@ -21,7 +21,8 @@ _solved: dict[float, dict] = {}
 def drawing(mu: float) -> dict:
     if mu not in _solved:
         scene = make_scene(process={"kind": "drawing"}, discretisation=COARSE, friction={"mu": mu},
-                           solver={"method": "direct", "force_tolerance": 1e-3, "max_iterations": 500})
+                           solver={"method": "direct", "force_tolerance": 1e-3,
+                                   "max_iterations": 500})
         _solved[mu] = solve_scene(scene)[2]
     return _solved[mu]
 
@@ -63,7 +64,8 @@ def test_drawing_run_writes_die_profile(shared_tmp):
         assert key in summary
     with (out / "die.csv").open() as stream:
         rows = list(csv.DictReader(stream))
-    assert set(rows[0]) == {"s", "x", "y", "contact_pressure", "averaged_normal_stress", "friction_stress"}
+    assert set(rows[0]) == {"s", "x", "y", "contact_pressure", "averaged_normal_stress",
+                            "friction_stress"}
     s = [float(r["s"]) for r in rows]
     assert s == sorted(s) and s[0] == pytest.approx(0.0, abs=1e-12)
     assert max(float(r["contact_pressure"]) for r in rows) > 100
@@ -74,28 +76,33 @@ def test_drawing_same_numbers_on_one_and_all_ranks():
     # the paper's Q1 with complete integration (Q2 reduced differs by 1.4e-8 in the force on 2 ranks
     # with dolfinx 0.9: the summation order's round-off, carried through the iteration)
     scene = make_scene(process={"kind": "drawing"}, friction={"mu": 0.2},
-                       discretisation={"mesh_size": 0.15, "element": "Q1", "volumetric_integration": "complete"})
+                       discretisation={"mesh_size": 0.15, "element": "Q1",
+                                       "volumetric_integration": "complete"})
     parallel = solve_scene(scene, comm=MPI.COMM_WORLD)[2]
     serial = solve_scene(scene, comm=MPI.COMM_SELF)[2]
     assert parallel["linear_solves"] == serial["linear_solves"]
-    for key in ("drawing_force", "drawing_stress", "mean_die_pressure", "contact_length", "die_force_x",
-                "die_friction_force_x"):
+    for key in ("drawing_force", "drawing_stress", "mean_die_pressure", "contact_length",
+                "die_force_x", "die_friction_force_x"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-8), key
     # a difference of two forces: its relative precision is that of the forces over the residual
-    assert parallel["force_balance_residual"] == pytest.approx(serial["force_balance_residual"], abs=1e-8)
+    assert parallel["force_balance_residual"] == pytest.approx(serial["force_balance_residual"],
+                                                               abs=1e-8)
 
 
 def test_exact_slip_line_field_is_approached_from_above():
-    """Frictionless drawing at r = 2 sin(a)/(1 + 2 sin(a)): Hill's field (triangle + centred fan) is exact,
-    q = 2k(1 + a)(1 - r). The flow solution approaches it from above as the mesh is refined."""
+    """Frictionless drawing at r = 2 sin(a)/(1 + 2 sin(a)): Hill's field (triangle + centred fan) is
+    exact, q = 2k(1 + a)(1 - r). The flow solution approaches it from above as the mesh is
+    refined."""
     angle = math.radians(6.0)
     r = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
     exact_q = 2 * 100 * (1 + angle) * (1 - r)
     errors = []
     for size in (0.1, 0.05):
-        scene = make_scene(process={"kind": "drawing"}, geometry={"exit_thickness": 1.625 * (1 - r)},
+        scene = make_scene(process={"kind": "drawing"},
+                           geometry={"exit_thickness": 1.625 * (1 - r)},
                            discretisation={**COARSE, "mesh_size": size},
-                           solver={"method": "direct", "force_tolerance": 1e-3, "max_iterations": 500})
+                           solver={"method": "direct", "force_tolerance": 1e-3,
+                                   "max_iterations": 500})
         result = solve_scene(scene)[2]
         assert result["converged"] and result["force_balance_residual"] < 1e-3
         errors.append(result["mean_die_pressure"] / exact_q - 1)

@@ -46,7 +46,8 @@ def test_direct_and_modified_methods_agree():
 def test_ram_face_pressure_follows_the_penalty(d):
     """p_av on Gamma1 differs from the ram pressure by the deviatoric stress of the ram-side zone,
     which the penalty compresses at the volumetric rate d*sigma_H (uniaxial strain, u_y ~ 0):
-    below the rate rate1 of (4.5) p_ram = p_av (1 + 4/9 G(rate1) d); above it p_ram = p_av + 2/3 sigma_p."""
+    below the rate rate1 of (4.5) p_ram = p_av (1 + 4/9 G(rate1) d); above it p_ram = p_av + 2/3
+    sigma_p."""
     result = solved(solver=DIRECT, penalty={"d": d})
     p_ram, p_av = result["ram_pressure"], result["mean_hydrostatic_pressure"]
     expected = ram_face_pressure_model(make_scene().material, d, p_ram)
@@ -54,8 +55,8 @@ def test_ram_face_pressure_follows_the_penalty(d):
     assert p_ram == pytest.approx(solved(solver=DIRECT)["ram_pressure"], rel=2e-2)
 
 
-KEYS = ["ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "die_friction_force_x", "force_balance_residual",
-        "divergence_l2"]
+KEYS = ["ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "die_friction_force_x",
+        "force_balance_residual", "divergence_l2"]
 
 
 def test_same_numbers_on_one_and_all_ranks():
@@ -71,9 +72,12 @@ def test_same_numbers_on_one_and_all_ranks():
 
 
 def test_q1_with_complete_volumetric_integration_locks():
-    """verification.md: Q1 with complete integration of the penalty term locks (pressure far too high)."""
-    reduced = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "reduced"})
-    complete = solved(solver=DIRECT, discretisation={"element": "Q1", "volumetric_integration": "complete"})
+    """verification.md: Q1 with complete integration of the penalty term locks (pressure far too
+    high)."""
+    reduced = solved(solver=DIRECT,
+                     discretisation={"element": "Q1", "volumetric_integration": "reduced"})
+    complete = solved(solver=DIRECT,
+                      discretisation={"element": "Q1", "volumetric_integration": "complete"})
     assert abs(reduced["ram_pressure"] / HILL - 1) < 0.2
     assert complete["ram_pressure"] > 1.4 * reduced["ram_pressure"]
 
@@ -90,8 +94,8 @@ def test_node_and_centre_averaging_approach_each_other_under_refinement():
 
 
 def test_penalty_convergence_theorem_3_1():
-    """As d -> 0, ||div u|| falls like O(d) and the solution converges (measured ratios 8.9 to 10 per
-    decade; ram pressure 2.9568, 2.9616, 2.96183, 2.96182 for d = 1e-3 ... 1e-6)."""
+    """As d -> 0, ||div u|| falls like O(d) and the solution converges (measured ratios 8.9 to 10
+    per decade; ram pressure 2.9568, 2.9616, 2.96183, 2.96182 for d = 1e-3 ... 1e-6)."""
     results = [solved(solver=DIRECT, penalty={"d": d}) for d in (1e-3, 1e-4, 1e-5, 1e-6)]
     divergence = [r["divergence_l2"] for r in results]
     pressure = [r["ram_pressure"] for r in results]
@@ -105,6 +109,7 @@ def test_penalty_convergence_theorem_3_1():
 def test_friction_regularisation_converges():
     """As d_T -> 0 the regularised friction (3.11) converges (measured ram pressure 3.4281, 3.43475,
     3.43483 for d_T = 1e-2, 1e-4, 1e-6 with mu = 0.1)."""
-    pressure = [solved(solver=DIRECT, friction={"mu": 0.1, "d_T": d_T})["ram_pressure"] for d_T in (1e-2, 1e-4, 1e-6)]
+    pressure = [solved(solver=DIRECT, friction={"mu": 0.1, "d_T": d_T})["ram_pressure"]
+                for d_T in (1e-2, 1e-4, 1e-6)]
     assert abs(pressure[2] - pressure[1]) < 0.1 * abs(pressure[1] - pressure[0])
     assert abs(pressure[2] - pressure[1]) < 1e-4 * pressure[2]

@@ -1,5 +1,5 @@
-"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the force
-balance; compiled forms equal their quadrature rules assembled apart."""
+"""The forms hold only the terms a scene needs; the applied force on Gamma5 enters f(v) and the
+force balance; compiled forms equal their quadrature rules assembled apart."""
 import dolfinx.fem
 import dolfinx.fem.petsc
 import pytest
@@ -41,14 +41,16 @@ def test_force_term_only_with_gamma5():
 
 
 def test_quadrature_degrees():
-    assert [quadrature_degree(k, reduced) for k in (1, 2) for reduced in (False, True)] == [3, 1, 5, 3]
+    assert [quadrature_degree(k, reduced)
+            for k in (1, 2) for reduced in (False, True)] == [3, 1, 5, 3]
 
 
 def test_front_tension_lowers_the_ram_force_and_keeps_the_balance():
     free = solved(solver={"method": "direct"})
     pulled = solved(solver={"method": "direct"}, process={"applied_force": 0.5})
     assert pulled["converged"]
-    assert pulled["applied_force_x"] == pytest.approx(0.5 * 5.0, rel=1e-12)  # F_N times the exit height
+    # F_N times the exit height
+    assert pulled["applied_force_x"] == pytest.approx(0.5 * 5.0, rel=1e-12)
     assert pulled["force_balance_residual"] < 1e-3
     assert pulled["ram_force"] < free["ram_force"] - 0.1
 
@@ -57,7 +59,8 @@ def _rules(form) -> list[ufl.Form]:
     """The form's integrals grouped by integral type and quadrature degree, one form per group."""
     groups: dict = {}
     for integral in form.integrals():
-        groups.setdefault((integral.integral_type(), integral.metadata().get("quadrature_degree")), []).append(integral)
+        groups.setdefault((integral.integral_type(), integral.metadata().get("quadrature_degree")),
+                          []).append(integral)
     return [ufl.Form(group) for group in groups.values()]
 
 
@@ -85,24 +88,26 @@ def _relative(a: PETSc.Vec, b: PETSc.Vec, scale: float | None = None) -> float:
 
 
 def _term_scale(form) -> float:
-    """The sum of the norms of a linear form's rules assembled apart: the size of the terms whose sum
-    (a residual near a solution) is far smaller; rounding errors are relative to it."""
+    """The sum of the norms of a linear form's rules assembled apart: the size of the terms whose
+    sum (a residual near a solution) is far smaller; rounding errors are relative to it."""
     return sum(_apart(rule).vector().norm() for rule in _rules(form))
 
 
 @pytest.mark.parametrize("element", ["Q1", "Q2"])
 def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
-    """FFCx miscomputes a scalar or linear form integrating a coefficient's derivatives with a one-point
-    rule beside another rule (Q1's reduced penalty term; forms.split_form). At a secant iterate of
-    Example 1 with contact and averaged friction (mu = 0.1, every term present), with reduced
-    integration: the secant residual, Newton's energy and residual (as FlowProblem compiles them) and
-    the secant matrix and Newton's operator (compiled as one form each) equal the sums of their
-    quadrature rules compiled apart, to rounding; and Newton's residual, the derivative of its energy,
-    equals the secant residual b(u; u, v) at u (one Euler equation). Residual differences are taken
-    relative to the sum of the rules' norms. Compiled as one form, the Q1 residual misses the sum of
-    its rules by 3.6e-2 of that scale (measured with split_form disabled), and Newton stalled on Q1."""
+    """FFCx miscomputes a scalar or linear form integrating a coefficient's derivatives with a
+    one-point rule beside another rule (Q1's reduced penalty term; forms.split_form). At a secant
+    iterate of Example 1 with contact and averaged friction (mu = 0.1, every term present), with
+    reduced integration: the secant residual, Newton's energy and residual (as FlowProblem compiles
+    them) and the secant matrix and Newton's operator (compiled as one form each) equal the sums of
+    their quadrature rules compiled apart, to rounding; and Newton's residual, the derivative of its
+    energy, equals the secant residual b(u; u, v) at u (one Euler equation). Residual differences
+    are taken relative to the sum of the rules' norms. Compiled as one form, the Q1 residual misses
+    the sum of its rules by 3.6e-2 of that scale (measured with split_form disabled), and Newton
+    stalled on Q1."""
     scene = make_scene(friction={"mu": 0.1},
-                       discretisation={"mesh_size": 0.5, "element": element, "volumetric_integration": "reduced",
+                       discretisation={"mesh_size": 0.5, "element": element,
+                                       "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},
                        solver={"method": "direct", "tolerance": 1e-2})
     problem = coupled_problem(scene, build_mesh(scene))
@@ -119,5 +124,6 @@ def test_reduced_integration_forms_equal_their_rules_assembled_apart(element):
     x = petsc_vec(problem.u).duplicate()
     x.setRandom(PETSc.Random().create(problem.comm))
     for compiled, form in ((problem.a, problem.a_ufl), (forms.operator, forms.operator_ufl)):
-        assert _relative(_matrix_action([compiled], x), _matrix_action(_apart(form).parts, x)) < 1e-12
+        assert _relative(_matrix_action([compiled], x),
+                         _matrix_action(_apart(form).parts, x)) < 1e-12
     assert len(forms.residual.parts) == (2 if element == "Q1" else 1)

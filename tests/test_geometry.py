@@ -36,7 +36,8 @@ def test_extrusion_roles_and_measures(element):
                "gamma6_symmetry": 16.0}
     for role, length in lengths.items():
         assert integrate(mesh, one * ds(ROLES[role])) == pytest.approx(length, rel=1e-12)
-    assert integrate(mesh, one * ufl.ds) == pytest.approx(sum(lengths.values()), rel=1e-12)  # every facet has a role
+    # every facet has a role
+    assert integrate(mesh, one * ufl.ds) == pytest.approx(sum(lengths.values()), rel=1e-12)
 
 
 @pytest.mark.parametrize("builder", ["build_mesh", "sector_mesh"])
@@ -62,7 +63,8 @@ def role_lengths(fm) -> dict[str, float]:
 
 
 def test_applied_force_makes_the_exit_face_gamma5():
-    lengths = role_lengths(build_mesh(make_scene(process={"applied_force": 0.5}, discretisation={"mesh_size": 1.0})))
+    lengths = role_lengths(build_mesh(make_scene(process={"applied_force": 0.5},
+                                                 discretisation={"mesh_size": 1.0})))
     assert lengths["gamma5_force"] == pytest.approx(2.5, rel=1e-12)
     assert lengths["gamma4_free"] == pytest.approx(10.0, rel=1e-12)
 
@@ -83,8 +85,8 @@ def test_drawing_roles_and_measures(land, drive):
     assert lengths["gamma2_free"] == pytest.approx(g.die_entry, rel=1e-12)
     assert lengths["gamma4_free"] == pytest.approx(g.length - g.die_exit, rel=1e-12)
     area = integrate(fm.mesh, dolfinx.fem.Constant(fm.mesh, 1.0) * ufl.dx)
-    assert area == pytest.approx(g.die_entry * h0 + g.cone_length * (h0 + h1) / 2 + (g.length - g.die_entry
-                                                                                    - g.cone_length) * h1, rel=1e-12)
+    assert area == pytest.approx(g.die_entry * h0 + g.cone_length * (h0 + h1) / 2
+                                 + (g.length - g.die_entry - g.cone_length) * h1, rel=1e-12)
 
 
 def test_graded_edge_ratio():
@@ -109,7 +111,8 @@ def smallest_cell_near(fm, point) -> float:
 
 
 def test_corner_grading_refines_toward_die_corner():
-    sizes = [smallest_cell_near(build_mesh(make_scene(discretisation={"mesh_size": 0.5, "corner_grading": g})),
+    sizes = [smallest_cell_near(build_mesh(make_scene(discretisation={"mesh_size": 0.5,
+                                                                      "corner_grading": g})),
                                 np.array([10.0, 2.5])) for g in (1.0, 8.0)]
     assert sizes[0] == pytest.approx(0.5 * 2**0.5, rel=1e-9)
     assert sizes[1] < sizes[0] / 3
@@ -123,7 +126,8 @@ def test_msh_file_has_named_roles(tmp_path):
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(path))
-        names = {gmsh.model.getPhysicalName(dim, tag) for dim, tag in gmsh.model.getPhysicalGroups()}
+        names = {gmsh.model.getPhysicalName(dim, tag)
+                 for dim, tag in gmsh.model.getPhysicalGroups()}
         _, _, nodes = gmsh.model.mesh.getElements(2)
     finally:
         gmsh.finalize()
@@ -132,8 +136,8 @@ def test_msh_file_has_named_roles(tmp_path):
 
 
 def test_mesh_partition_repeats(monkeypatch):
-    """Eight builds of the same mesh distribute its cells alike (with SCOTCH's threads, builds of this
-    mesh differed), in balanced parts, and SCOTCH_PTHREAD_NUMBER is left as it was."""
+    """Eight builds of the same mesh distribute its cells alike (with SCOTCH's threads, builds of
+    this mesh differed), in balanced parts, and SCOTCH_PTHREAD_NUMBER is left as it was."""
     comm = MPI.COMM_WORLD
     monkeypatch.setenv("SCOTCH_PTHREAD_NUMBER", "2")
     scene = make_scene(discretisation={"mesh_size": 0.25})

@@ -24,8 +24,9 @@ def test_exact_stress_rise_is_the_strain_integral():
               "swift": ((0.02 + eps1) ** 1.3 - 0.02 ** 1.3) / 1.3,
               "voce": eps1 - 0.5 * 0.3 * (1 - math.exp(-eps1 / 0.3))}
     for name, law in LAWS.items():
-        material = scene_from_dict({"process": {"kind": "drawing"}, "discretisation": {
-            "averaging": "quadrature"}, "material": {**law, "rate_factor": "power", "m": 1e-9}}).material
+        material = scene_from_dict({
+            "process": {"kind": "drawing"}, "discretisation": {"averaging": "quadrature"},
+            "material": {**law, "rate_factor": "power", "m": 1e-9}}).material
         value = radial_hardening_stress_rise("axisymmetric", material)
         # Hollomon's strain floor 0.002 adds 0.002^1.3 (1 - 1/1.3) at the start: 7e-5
         assert value == pytest.approx(closed[name], rel=3e-4), name
@@ -43,7 +44,8 @@ def test_cone_with_hardening(law):
 
 def test_cone_hardening_converges_under_refinement():
     """Hollomon through the cone on Q1: the exit stress error falls with the mesh (measured 0.259 %,
-    0.134 %, 0.069 % on 4, 8, 16 cells: order 0.95) and the exit strain error too (order 1.0 to 1.6)."""
+    0.134 %, 0.069 % on 4, 8, 16 cells: order 0.95) and the exit strain error too (order 1.0 to
+    1.6)."""
     runs = [radial_flow("axisymmetric", 0.0, "Q1", cells, material=LAWS["hollomon"])
             for cells in (4, 8, 16)]
     stress = [abs(r["exit_stress"] / r["exact_exit_stress"] - 1) for r in runs]

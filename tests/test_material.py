@@ -12,7 +12,8 @@ from forming_fenicsx.physics.flow_laws import PiecewisePowerLaw, PowerLaw
 def test_piecewise_power_law_branches():
     law = PiecewisePowerLaw(A=2.0, alpha=0.2, rate1=1e-2, rate2=1e2)
     rates = np.array([1e-4, 1e-2, 1.0, 1e2, 1e4])
-    expected = [2.0 * 1e-2**0.2 / 1e-2 * 1e-4, 2.0 * 1e-2**0.2, 2.0, 2.0 * 1e2**0.2, 2.0 * 1e2**0.2 / 1e2 * 1e4]
+    expected = [2.0 * 1e-2**0.2 / 1e-2 * 1e-4, 2.0 * 1e-2**0.2, 2.0, 2.0 * 1e2**0.2,
+                2.0 * 1e2**0.2 / 1e2 * 1e4]
     assert np.allclose(law.flow_stress(rates), expected, rtol=1e-14)
 
 
@@ -29,9 +30,11 @@ def test_power_law_floor():
     assert law.secant(np.array([0.0]))[0] == pytest.approx(3.0 * 1e-4**-0.5, rel=1e-14)
 
 
-@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0), PowerLaw(n=0.3).resolve(1.0)])
+@pytest.mark.parametrize("law", [PiecewisePowerLaw(), PiecewisePowerLaw(alpha=1.0),
+                                 PowerLaw(n=0.3).resolve(1.0)])
 def test_condition_2_10(law):
-    """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant non-increasing."""
+    """eta1 <= sigma_p' <= sigma_p/rate <= eta2: sigma_p increasing and the secant
+    non-increasing."""
     rates = np.logspace(-8, 6, 2001)
     sigma, secant = law.flow_stress(rates), law.secant(rates)
     slope = np.diff(sigma) / np.diff(rates)
@@ -73,7 +76,8 @@ def test_hardening_curves_and_rate_factors():
     assert hollomon.flow_stress([1.0], 0.0)[0] == pytest.approx(315 * 0.002**0.54, rel=1e-12)
     assert swift.flow_stress([8.0], 0.1)[0] == pytest.approx(500 * 0.12**0.2 * 8.0**0.05, rel=1e-12)
     h = 250 - 150 * math.exp(-0.2 / 0.3)
-    assert voce.flow_stress([10.0], 0.2)[0] == pytest.approx(h * (1 + 0.03 * math.log(100)), rel=1e-12)
+    assert voce.flow_stress([10.0], 0.2)[0] == pytest.approx(h * (1 + 0.03 * math.log(100)),
+                                                             rel=1e-12)
     assert voce.flow_stress([0.01], 0.2)[0] == pytest.approx(h * 0.1**0.03, rel=1e-12)
     assert hollomon.flow_stress([1e3], 0.3)[0] / hollomon.flow_stress([1e-3], 0.3)[0] == \
         pytest.approx(1e6**1e-3, rel=1e-12)  # rate_factor "none": the regularising exponent only
@@ -127,8 +131,8 @@ def test_named_material_cited_and_overridden():
 
 
 def test_sellars_tegart_law():
-    """AA6063 (reference section 4) against sigma = asinh((Z/A)^(1/n))/alpha_s at 450 C: 25.62 MPa at
-    1/s (the power-law fit of demos/aluminium_rod.toml gives 25.6); (2.10) and the temperature
+    """AA6063 (reference section 4) against sigma = asinh((Z/A)^(1/n))/alpha_s at 450 C: 25.62 MPa
+    at 1/s (the power-law fit of demos/aluminium_rod.toml gives 25.6); (2.10) and the temperature
     checked by key; the Gauss-Legendre potential against an adaptive quadrature of sigma."""
     import dolfinx.fem
     import dolfinx.mesh
@@ -149,7 +153,8 @@ def test_sellars_tegart_law():
         exact = math.asinh((z / math.exp(22.5)) ** (1 / 5.385)) / 0.040
         assert law.flow_stress([rate])[0] == pytest.approx(exact, rel=1e-12)
     assert law.flow_stress([1.0])[0] == pytest.approx(25.62, abs=0.01)
-    assert law.flow_stress([1.0], temperature=773.15)[0] < law.flow_stress([1.0])[0]  # hotter, softer
+    # hotter, softer
+    assert law.flow_stress([1.0], temperature=773.15)[0] < law.flow_stress([1.0])[0]
     mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 1, 1)
     for rate in (1e-7, 0.3, 30.0):
         value = MPI.COMM_WORLD.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(
@@ -166,7 +171,8 @@ def test_sellars_tegart_law():
             scene(material)
         assert error.value.key == key
     with pytest.raises(SceneError) as error:
-        scene_from_dict({"process": {"kind": "extrusion"}, "units": {"stress": "MPa", "time": "min"},
+        scene_from_dict({"process": {"kind": "extrusion"},
+                         "units": {"stress": "MPa", "time": "min"},
                          "material": {"name": "AA6063", "temperature": 700.0}})
     assert error.value.key == "material.name"
     with pytest.raises(SceneError) as error:

@@ -1,5 +1,5 @@
-"""The mixed velocity-pressure formulation (Q2 velocity, discontinuous P1 pressure): the d -> 0 limit of
-the penalty problem (Theorem 3.1) computed directly."""
+"""The mixed velocity-pressure formulation (Q2 velocity, discontinuous P1 pressure): the d -> 0
+limit of the penalty problem (Theorem 3.1) computed directly."""
 import pytest
 
 from forming_fenicsx.core.errors import SceneError
@@ -10,21 +10,26 @@ from conftest import make_scene
 DIRECT = {"method": "direct", "force_tolerance": 1e-3, "max_iterations": 1000}
 
 
-def limit_and_mixed(kind: str, discretisation: dict, d_values: tuple, **sections) -> tuple[list[dict], dict]:
-    penalty = [solve_scene(make_scene(process={"kind": kind}, discretisation=discretisation, penalty={"d": d},
-                                      solver=DIRECT, **sections))[2] for d in d_values]
-    mixed = solve_scene(make_scene(process={"kind": kind}, discretisation={**discretisation, "formulation": "mixed"},
+def limit_and_mixed(kind: str, discretisation: dict, d_values: tuple,
+                    **sections) -> tuple[list[dict], dict]:
+    penalty = [solve_scene(make_scene(process={"kind": kind}, discretisation=discretisation,
+                                      penalty={"d": d}, solver=DIRECT, **sections))[2]
+               for d in d_values]
+    mixed = solve_scene(make_scene(process={"kind": kind},
+                                   discretisation={**discretisation, "formulation": "mixed"},
                                    solver=DIRECT, **sections))[2]
     return penalty, mixed
 
 
 def test_extrusion_mixed_matches_the_penalty_limit():
-    """Example 1, h = 0.25 (measured: mixed 2.8029, penalty 2.8192 at d = 1e-5, 1e-7: -0.58 %); the mixed
-    pressure is exactly divergence-free against P1 and its ram-face mean is the ram pressure, unlike the
-    penalty's p_av at d = 1e-3 (1.63 there, docs/example1.md)."""
+    """Example 1, h = 0.25 (measured: mixed 2.8029, penalty 2.8192 at d = 1e-5, 1e-7: -0.58 %); the
+    mixed pressure is exactly divergence-free against P1 and its ram-face mean is the ram pressure,
+    unlike the penalty's p_av at d = 1e-3 (1.63 there, docs/example1.md)."""
     penalty, mixed = limit_and_mixed("extrusion", {"mesh_size": 0.25}, (1e-5, 1e-7))
-    assert penalty[0]["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=1e-4)  # the d -> 0 limit
-    assert mixed["converged"] and mixed["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=0.01)
+    # the d -> 0 limit
+    assert penalty[0]["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=1e-4)
+    assert (mixed["converged"]
+            and mixed["ram_pressure"] == pytest.approx(penalty[1]["ram_pressure"], rel=0.01))
     assert mixed["discrete_divergence"] < 1e-10 and "discrete_divergence" not in penalty[0]
     assert mixed["mean_hydrostatic_pressure"] == pytest.approx(mixed["ram_pressure"], rel=0.01)
     assert not mixed["warnings"]

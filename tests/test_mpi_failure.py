@@ -1,4 +1,5 @@
-"""An exception on one MPI rank ends every rank with that rank's message: no deadlock, no results."""
+"""An exception on one MPI rank ends every rank with that rank's message: no deadlock, no
+results."""
 import os
 import subprocess
 import sys
@@ -21,7 +22,8 @@ def failing(path, u):
         raise RuntimeError("injected failure on this rank")
     original(path, u)
 run.save_velocity = failing
-sys.exit(main(["run", sys.argv[1], "--out", sys.argv[2], "--quiet", "--set", "discretisation.mesh_size=1.0",
+sys.exit(main(["run", sys.argv[1], "--out", sys.argv[2], "--quiet",
+               "--set", "discretisation.mesh_size=1.0",
                "--set", "output.fields=false", "--set", "output.figures=false"]))
 """
 
@@ -31,11 +33,13 @@ def test_one_rank_failure_ends_all_ranks(shared_tmp):
     out = shared_tmp / "aborted"
     outcome = None
     if MPI.COMM_WORLD.rank == 0:
-        env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
+        env = {k: v for k, v in os.environ.items()
+               if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                   OMPI_MCA_rmaps_base_oversubscribe="1", PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
-        child = subprocess.run(["mpirun", "-n", "2", sys.executable, "-c", CHILD, DEMO, str(out)], env=env,
-                               capture_output=True, text=True, timeout=300)
+                   OMPI_MCA_rmaps_base_oversubscribe="1",
+                   PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
+        child = subprocess.run(["mpirun", "-n", "2", sys.executable, "-c", CHILD, DEMO, str(out)],
+                               env=env, capture_output=True, text=True, timeout=300)
         outcome = (child.returncode, child.stderr)
     returncode, stderr = MPI.COMM_WORLD.bcast(outcome, root=0)
     assert returncode != 0

@@ -16,25 +16,28 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 def test_copper_wire_demo(shared_tmp):
-    """demos/copper_wire.toml as shipped: Newton in at most 15 solves; the drawing stress between Sachs'
-    (no redundant work, no bearing) and 1.4 times it (measured 1.21: Delta = 1.99); the force over the
-    exit area; forces of the whole wire in N; the die pushed apart. Without its figures (1.6 s; the
-    figures of this scene are drawn and checked by tests/test_figures.py)."""
+    """demos/copper_wire.toml as shipped: Newton in at most 15 solves; the drawing stress between
+    Sachs' (no redundant work, no bearing) and 1.4 times it (measured 1.21: Delta = 1.99); the force
+    over the exit area; forces of the whole wire in N; the die pushed apart. Without its figures
+    (1.6 s; the figures of this scene are drawn and checked by tests/test_figures.py)."""
     scene = load_scene(DEMOS / "copper_wire.toml", ["output.figures=false"])
     summary = run_scene(scene, shared_tmp / "copper_wire")
     sigma0 = summary["scales"]["flow_stress"]
     sachs = sigma0 * sachs_drawing_stress(summary["reduction"], 6.0, 0.05)
     assert summary["converged"] and summary["linear_solves"] <= 15
     assert 1.0 < summary["drawing_stress"] / sachs < 1.4
-    assert summary["drawing_force"] == pytest.approx(summary["drawing_stress"] * math.pi * 0.9**2, rel=1e-12)
+    assert summary["drawing_force"] == pytest.approx(summary["drawing_stress"] * math.pi * 0.9**2,
+                                                     rel=1e-12)
     assert summary["units"]["quantities"]["drawing_force"] == "N"
     assert summary["die_separation_force"] > summary["drawing_force"]
-    assert summary["central_burst_indicator"] == pytest.approx(math.radians(6) / 0.19 * (1 + 0.9) ** 2)
+    assert summary["central_burst_indicator"] == pytest.approx(math.radians(6) / 0.19
+                                                               * (1 + 0.9) ** 2)
     written = json.loads((shared_tmp / "copper_wire" / "summary.json").read_text())
     assert written["drawing_stress"] == summary["drawing_stress"]
 
 
-def drawing(symmetry: str, friction: dict, back_tension: float | None = None, angle: float = 8.0) -> float:
+def drawing(symmetry: str, friction: dict, back_tension: float | None = None,
+            angle: float = 8.0) -> float:
     """sigma_d / sigma0 of a 2 -> 1.8 pass (thickness or diameter), no land, a coarse Q2 mesh."""
     ends = {"entry_diameter": 2.0, "exit_diameter": 1.8} if symmetry == "axisymmetric" else \
         {"entry_thickness": 2.0, "exit_thickness": 1.8}
@@ -61,9 +64,10 @@ def test_back_tension_adds_to_the_drawing_stress(symmetry):
 
 def test_friction_factor_below_avitzur_bound():
     """m = 0.1, 19 % reduction of area through 8 degrees: the FE drawing stress (a rigid-plastic
-    solution) lies below Avitzur's upper bound and above the ideal work ln(A0/A1); m = 0.2 costs more."""
-    low, high = drawing("axisymmetric", {"law": "factor", "m": 0.1}), drawing("axisymmetric",
-                                                                           {"law": "factor", "m": 0.2})
+    solution) lies below Avitzur's upper bound and above the ideal work ln(A0/A1); m = 0.2 costs
+    more."""
+    low, high = (drawing("axisymmetric", {"law": "factor", "m": 0.1}),
+                 drawing("axisymmetric", {"law": "factor", "m": 0.2}))
     assert -math.log(0.81) < low < avitzur_drawing_stress(0.19, 8.0, 0.1)
     assert low < high < avitzur_drawing_stress(0.19, 8.0, 0.2)
 
@@ -84,7 +88,8 @@ def test_aluminium_rod_demo(shared_tmp):
     sigma0 = summary["scales"]["flow_stress"]
     assert summary["converged"] and summary["linear_solves"] <= 15
     assert summary["warnings"] == []
-    assert summary["ram_force"] == pytest.approx(summary["ram_pressure"] * math.pi * 25.0**2, rel=1e-9)
+    assert summary["ram_force"] == pytest.approx(summary["ram_pressure"] * math.pi * 25.0**2,
+                                                 rel=1e-9)
     assert summary["units"]["quantities"]["ram_force"] == "N"
     assert 2.0 < summary["ram_pressure"] / (sigma0 * math.log(6.25)) < 5.0
     assert summary["reduction"] == pytest.approx(0.84)

@@ -22,8 +22,9 @@ COARSE = ["--set", "discretisation.mesh_size=1.0", "--quiet"]
 # For the runs whose test reads neither fields.xdmf nor a figure (the figures took 0.95 s of each
 # run on this mesh); test_run_writes_summary_history_fields_and_figures checks both
 NO_FIELDS_NO_FIGURES = ["--set", "output.fields=false", "--set", "output.figures=false"]
-REQUIRED = {"scene", "dolfinx_version", "mpi_ranks", "dofs", "converged", "linear_solves", "outer_iterations",
-            "wall_time_s", "ram_pressure", "mean_hydrostatic_pressure", "die_force_x", "force_balance_residual"}
+REQUIRED = {"scene", "dolfinx_version", "mpi_ranks", "dofs", "converged", "linear_solves",
+            "outer_iterations", "wall_time_s", "ram_pressure", "mean_hydrostatic_pressure",
+            "die_force_x", "force_balance_residual"}
 
 
 def test_run_writes_summary_history_fields_and_figures(shared_tmp):
@@ -35,7 +36,8 @@ def test_run_writes_summary_history_fields_and_figures(shared_tmp):
     summary = json.loads((out / "summary.json").read_text())
     assert REQUIRED <= set(summary)
     assert summary["converged"] is True and summary["mpi_ranks"] == MPI.COMM_WORLD.size
-    assert summary["scene"]["friction"]["mu"] == 0.1 and summary["scene"]["discretisation"]["mesh_size"] == 1.0
+    assert (summary["scene"]["friction"]["mu"] == 0.1
+            and summary["scene"]["discretisation"]["mesh_size"] == 1.0)
     assert summary["force_balance_residual"] < 1e-2
     with (out / "history.csv").open() as stream:
         rows = list(csv.DictReader(stream))
@@ -43,7 +45,8 @@ def test_run_writes_summary_history_fields_and_figures(shared_tmp):
     assert float(rows[-1]["relative_increment"]) < 1e-4
     assert [int(r["outer"]) for r in rows][-1] == summary["outer_iterations"] - 1
     names = {a.get("Name") for a in ElementTree.parse(out / "fields.xdmf").iter("Attribute")}
-    assert names == {"velocity", "equivalent_strain_rate", "hydrostatic_pressure", "secant_viscosity"}
+    assert names == {"velocity", "equivalent_strain_rate", "hydrostatic_pressure",
+                     "secant_viscosity"}
     assert (out / "fields.h5").stat().st_size > 1000
     for figure in ("velocity.png", "strain_rate.png", "die.png"):
         assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -90,12 +93,13 @@ def test_existing_output_is_kept_without_force_and_replaced_with_it(shared_tmp, 
 def test_failed_linear_solve_stops_with_reason_and_keeps_last_iterate(shared_tmp):
     out = shared_tmp / "ksp"
     # an unpreconditioned CG limited to 2 iterations cannot solve the first system
-    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-ksp_type", "cg", "-pc_type", "none",
-                 "-ksp_max_it", "2"]) == 3
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-ksp_type", "cg",
+                 "-pc_type", "none", "-ksp_max_it", "2"]) == 3
     MPI.COMM_WORLD.barrier()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False
-    assert "linear solve failed at outer 0, inner 0" in summary["reason"] and "penalty" in summary["reason"]
+    assert ("linear solve failed at outer 0, inner 0" in summary["reason"]
+            and "penalty" in summary["reason"])
 
 
 class _SignalAtThirdIterate(logging.Handler):
@@ -121,7 +125,8 @@ def test_sigterm_ends_the_run_cleanly_with_the_last_iterate(shared_tmp):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False
     assert summary["reason"].startswith("interrupted by SIGTERM at outer 0, inner 3")
-    assert summary["linear_solves"] == 4  # the uniform start and three secant iterates, all on every rank
+    # the uniform start and three secant iterates, all on every rank
+    assert summary["linear_solves"] == 4
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # the handler is restored
 
 
@@ -136,23 +141,25 @@ def test_restart_from_a_previous_run(shared_tmp, capsys):
     assert b["restarted_from"] == str(first)
     assert b["linear_solves"] <= 2 < a["linear_solves"]
     assert b["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
-    # the restart file does not depend on the partition: restart this rank's own serial solve from it
+    # the restart file does not depend on the partition: restart this rank's own serial solve from
+    # it
     scene = load_scene(DEMO, ["discretisation.mesh_size=1.0"])
     serial = solve_scene(scene, comm=MPI.COMM_SELF, restart=first)[2]
-    assert serial["linear_solves"] <= 2 and serial["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4)
+    assert (serial["linear_solves"] <= 2
+            and serial["ram_pressure"] == pytest.approx(a["ram_pressure"], rel=1e-4))
     # another mesh is refused before solving
-    assert main(["run", DEMO, "--out", str(shared_tmp / "other"), "--quiet", "--restart", str(first),
-                 "--set", "discretisation.mesh_size=0.5"]) == 2
+    assert main(["run", DEMO, "--out", str(shared_tmp / "other"), "--quiet",
+                 "--restart", str(first), "--set", "discretisation.mesh_size=0.5"]) == 2
     if MPI.COMM_WORLD.rank == 0:
         assert "not the same mesh" in capsys.readouterr().err
 
 
 def test_zero_pivot_stops_with_reason(shared_tmp):
-    """PETSc's own LU told that every pivot is zero (on 2 ranks it refuses the parallel matrix): either
-    way the run ends at the first solve with the reason, not a traceback."""
+    """PETSc's own LU told that every pivot is zero (on 2 ranks it refuses the parallel matrix):
+    either way the run ends at the first solve with the reason, not a traceback."""
     out = shared_tmp / "pivot"
-    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-pc_type", "lu", "-pc_factor_mat_solver_type",
-                 "petsc", "-pc_factor_zeropivot", "1e300"]) == 3
+    assert main(["run", DEMO, "--out", str(out), *COARSE, "--", "-pc_type", "lu",
+                 "-pc_factor_mat_solver_type", "petsc", "-pc_factor_zeropivot", "1e300"]) == 3
     MPI.COMM_WORLD.barrier()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False and summary["linear_solves"] == 0
@@ -160,21 +167,25 @@ def test_zero_pivot_stops_with_reason(shared_tmp):
 
 
 @pytest.mark.no_parallel_content  # a serial child process (tests/conftest.py)
-def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user_permissions(shared_tmp):
-    """A first run compiles every form (FFCx logs each gcc command through the root logger's handler,
-    about 30 lines before the fix): with --quiet a converged run without warnings prints nothing, and
-    the output folder gets the user's umask (it was mkdtemp's 0700). Run in a child process (rank 0)
-    with an empty form cache."""
+def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user_permissions(
+        shared_tmp):
+    """A first run compiles every form (FFCx logs each gcc command through the root logger's
+    handler, about 30 lines before the fix): with --quiet a converged run without warnings prints
+    nothing, and the output folder gets the user's umask (it was mkdtemp's 0700). Run in a child
+    process (rank 0) with an empty form cache."""
     out = shared_tmp / "quiet"
     if MPI.COMM_WORLD.rank == 0:
-        env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
+        env = {k: v for k, v in os.environ.items()
+               if not k.startswith(("OMPI_", "PMIX_", "PRTE_", "OPAL_"))}
         env.update(XDG_CACHE_HOME=str(shared_tmp / "cold-cache"), OMPI_ALLOW_RUN_AS_ROOT="1",
                    OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "run", DEMO, "--out", str(out),
-                               *COARSE, "--set", "output.fields=false", "--set", "output.figures=false"],
+        done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "run", DEMO,
+                               "--out", str(out), *COARSE,
+                               "--set", "output.fields=false", "--set", "output.figures=false"],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
-        assert (shared_tmp / "cold-cache").is_dir()  # the forms were compiled, not taken from a cache
+        # the forms were compiled, not taken from a cache
+        assert (shared_tmp / "cold-cache").is_dir()
         assert done.stdout == "" and done.stderr == ""
         umask = os.umask(0)
         os.umask(umask)
@@ -184,8 +195,8 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
 
 
 def test_a_run_leaves_no_petsc_options_behind():
-    """PETSc's options database holds 512 entries: each run's prefixed solver options are removed when
-    its solvers are destroyed (the whole suite in one process once filled it)."""
+    """PETSc's options database holds 512 entries: each run's prefixed solver options are removed
+    when its solvers are destroyed (the whole suite in one process once filled it)."""
     from petsc4py import PETSc
 
     before = set(PETSc.Options().getAll())

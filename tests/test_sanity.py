@@ -8,8 +8,10 @@ from forming_fenicsx.config.loader import scene_from_dict
 # measured on Example 2 (mu = 0.2, Q2 reduced, h = 0.05) with the default penalties
 NORMAL = {"die_penetration": 2e-5, "relative_divergence": 3e-3, "exit_zone_rate_ratio": 1.5e-5,
           "drawing_stress": 70.0, "free_surface_crossing": 0.019, "die_contact_fraction": 0.8,
-          "dissipation_above_rate2": 0.037, "dissipation_below_rate1": 0.01, "solve_error_estimate": 1e-9,
-          "product_yield_ratio": 70.0 / 201.0, "force_balance_residual": 2e-5}  # the drawing stress over the strip's 2k, about 201
+          "dissipation_above_rate2": 0.037, "dissipation_below_rate1": 0.01,
+          "solve_error_estimate": 1e-9,
+          # the drawing stress over the strip's 2k, about 201
+          "product_yield_ratio": 70.0 / 201.0, "force_balance_residual": 2e-5}
 SCENE = scene_from_dict({"process": {"kind": "drawing"}})
 
 
@@ -25,7 +27,8 @@ def test_a_normal_run_passes_every_check():
     ("die_penetration", 0.02, 0.083, "die_penetration", "smaller solver.tolerance"),
     ("relative_divergence", 0.2, 0.6, "compressibility", "the material compresses"),
     ("product_yield_ratio", 0.95, 1.05, "drawability", "not drawable"),
-    ("free_surface_crossing", 0.08, 0.98, "free_surface_crossing", "refine discretisation.mesh_size"),
+    ("free_surface_crossing", 0.08, 0.98, "free_surface_crossing",
+     "refine discretisation.mesh_size"),
     ("force_balance_residual", 0.02, 0.62, "force_balance", "solver.force_tolerance"),
 ])
 def test_graded_checks_warn_then_fail(key, warn, fail, check, phrase):
@@ -46,7 +49,8 @@ def test_a_yielding_product_and_no_contact_fail():
 
 
 def test_work_outside_the_rate_window_warns():
-    found = check_run({**NORMAL, "dissipation_above_rate2": 0.2, "dissipation_below_rate1": 0.6}, SCENE)
+    found = check_run({**NORMAL, "dissipation_above_rate2": 0.2, "dissipation_below_rate1": 0.6},
+                      SCENE)
     messages = [f.message for f in found if f.check == "rate_window"]
     assert len(messages) == 2 and not any(f.failure for f in found)
     assert "Raise material.rate2" in messages[0] and "Lower material.rate1" in messages[1]

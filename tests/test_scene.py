@@ -14,17 +14,20 @@ DEMOS = Path(__file__).parents[1] / "demos"
 
 def test_defaults_are_the_papers_example1():
     scene = scene_from_dict({"process": {"kind": "extrusion"}})
-    assert (scene.geometry.length, scene.geometry.entry_thickness, scene.geometry.exit_thickness) == (20, 10, 5)
+    assert (scene.geometry.length, scene.geometry.entry_thickness,
+            scene.geometry.exit_thickness) == (20, 10, 5)
     assert scene.material.A == pytest.approx(3**0.5)
     assert (scene.material.alpha, scene.material.rate1, scene.material.rate2) == (1e-3, 1e-3, 1e3)
     # The default penalties are relative to the scene's scales (docs/penalties.md)
     rate, stress = scene.scales.strain_rate, scene.scales.flow_stress
-    assert (scene.scales.velocity, scene.scales.length) == (1.0, 10.0) and rate == pytest.approx(0.1)
+    assert ((scene.scales.velocity, scene.scales.length) == (1.0, 10.0)
+            and rate == pytest.approx(0.1))
     assert stress == pytest.approx(scene.material.flow_stress(rate))
     assert scene.penalty.d == pytest.approx(1e-4 * rate / stress, rel=1e-12)
     assert scene.penalty.d_N == pytest.approx(1e-3 / stress, rel=1e-12)
     assert scene.friction.d_T == pytest.approx(1e-6) and scene.penalty.augmented
-    assert (scene.discretisation.element, scene.discretisation.volumetric_integration) == ("Q2", "reduced")
+    assert (scene.discretisation.element,
+            scene.discretisation.volumetric_integration) == ("Q2", "reduced")
     assert scene.solver.tolerance == 1e-4
 
 
@@ -35,7 +38,8 @@ def test_demo_scenes_load():
 
 def test_overrides_take_toml_values_and_bare_strings():
     scene = load_scene(DEMOS / "example1_extrusion.toml",
-                       ["friction.mu=0.25", "discretisation.element=Q1", "solver.petsc_options.ksp_type=cg"])
+                       ["friction.mu=0.25", "discretisation.element=Q1",
+                        "solver.petsc_options.ksp_type=cg"])
     assert scene.friction.mu == 0.25
     assert scene.discretisation.element == "Q1"
     assert scene.solver.petsc_options["ksp_type"] == "cg"
@@ -58,8 +62,10 @@ def test_another_material_replaces_the_material_section():
 
 
 def test_petsc_options_merge_over_the_default_table():
-    scene = load_scene(DEMOS / "example1_extrusion.toml", ["solver.petsc_options.mat_mumps_icntl_7=5"])
-    assert scene.solver.petsc_options == {"ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps",
+    scene = load_scene(DEMOS / "example1_extrusion.toml",
+                       ["solver.petsc_options.mat_mumps_icntl_7=5"])
+    assert scene.solver.petsc_options == {"ksp_type": "preonly",
+                                          "pc_factor_mat_solver_type": "mumps",
                                           "mat_mumps_icntl_7": 5}
     scene = load_scene(DEMOS / "example1_extrusion.toml", ["solver.petsc_options.pc_type=cholesky"])
     assert scene.solver.petsc_options["pc_type"] == "cholesky"
@@ -70,7 +76,8 @@ BAD = [
     ({"geometry": {"entry_thickness": 0.0}}, "geometry.entry_thickness", "> 0"),
     ({"geometry": {"exit_thickness": 10.0}}, "geometry.exit_thickness", "must be <"),
     ({"geometry": {"exit_thickness": 12.0}}, "geometry.exit_thickness", "reduce"),
-    ({"geometry": {"die_position": 25.0, "length": 20.0}}, "geometry.die_position", "geometry.length"),
+    ({"geometry": {"die_position": 25.0, "length": 20.0}}, "geometry.die_position",
+     "geometry.length"),
     ({"friction": {"mu": -0.1}}, "friction.mu", ">= 0"),
     ({"friction": {"d_T": 0.0}}, "friction.d_T", "> 0"),
     ({"penalty": {"d": 0.0}}, "penalty.d", "> 0"),
@@ -91,7 +98,8 @@ BAD = [
     ({"material": {"law": "hollomon", "K": 315.0, "n": 1.5}}, "material.n", "Hollomon"),
     ({"material": {"law": "voce", "initial": 100.0, "saturation": 50.0, "scale": 0.2}},
      "material.saturation", ">= material.initial"),
-    ({"material": {"law": "swift", "K": 100.0, "n": 0.2, "prestrain": 0.01, "rate_factor": "power"}},
+    ({"material": {"law": "swift", "K": 100.0, "n": 0.2, "prestrain": 0.01,
+                   "rate_factor": "power"}},
      "material.m", "(0, 1]"),
     ({"material": {"law": "swift", "K": 100.0, "n": 0.2, "prestrain": 0.01, "C": 0.1}},
      "material.C", "does not apply"),
@@ -104,15 +112,20 @@ BAD = [
     ({"process": {"colour": "red"}}, "process.colour", "unknown key"),
     ({"processes": {}}, "processes", "unknown section"),
     ({"process": {"kind": "rolling"}}, "process.kind", "extrusion"),
-    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 0.0}}, "geometry.die_angle", "(0, 90)"),
-    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}}, "geometry.die_angle", "(0, 90)"),
-    ({"process": {"kind": "drawing"}, "geometry": {"land_length": -0.1}}, "geometry.land_length", ">= 0"),
+    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 0.0}},
+     "geometry.die_angle", "(0, 90)"),
+    ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}},
+     "geometry.die_angle", "(0, 90)"),
+    ({"process": {"kind": "drawing"}, "geometry": {"land_length": -0.1}},
+     "geometry.land_length", ">= 0"),
     ({"process": {"kind": "drawing"}, "geometry": {"land_length": 9.0, "length": 7.8}},
      "geometry.land_length", "end before"),
-    ({"process": {"kind": "drawing"}, "geometry": {"exit_thickness": 1.625}}, "geometry.exit_thickness", "reduce"),
-    ({"process": {"kind": "drawing"}, "friction": {"mollification_length": 0.0}}, "friction.mollification_length",
-     "> 0"),
-    ({"process": {"kind": "drawing"}, "friction": {"normal_stress": "nodal"}}, "friction.normal_stress", "averaged"),
+    ({"process": {"kind": "drawing"}, "geometry": {"exit_thickness": 1.625}},
+     "geometry.exit_thickness", "reduce"),
+    ({"process": {"kind": "drawing"}, "friction": {"mollification_length": 0.0}},
+     "friction.mollification_length", "> 0"),
+    ({"process": {"kind": "drawing"}, "friction": {"normal_stress": "nodal"}},
+     "friction.normal_stress", "averaged"),
     ({"process": {"kind": "drawing", "drive": "shove"}}, "process.drive", "push, pull"),
     ({"solver": {"force_tolerance": 2.0}}, "solver.force_tolerance", "[0, 1)"),
     ({"output": {"die_pressure": "mean"}}, "output.die_pressure", "penalty, stress"),
@@ -137,8 +150,8 @@ def test_drawing_defaults_are_the_papers_example2():
     assert (scene.penalty.d, scene.penalty.d_N, scene.friction.d_T) == (0.005, 0.01, 1e-6)
     assert not scene.penalty.augmented  # the paper's pure penalty contact
     assert scene_from_dict({"process": {"kind": "drawing"}}).discretisation.element == "Q2"
-    assert [load_scene(DEMOS / f"example2_drawing{s}.toml").friction.mu for s in ("", "_mu02", "_mu04")] == [
-        0.0, 0.2, 0.4]
+    assert [load_scene(DEMOS / f"example2_drawing{s}.toml").friction.mu
+            for s in ("", "_mu02", "_mu04")] == [0.0, 0.2, 0.4]
 
 
 def test_missing_process_kind():
@@ -160,7 +173,8 @@ def test_cli_rejects_bad_scene_before_meshing(tmp_path, capsys):
 
 def test_cli_rejects_bad_override_and_toml(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["run", str(DEMOS / "example1_extrusion.toml"), "--out", str(out), "--set", "penalty.dd=1"]) == 2
+    assert main(["run", str(DEMOS / "example1_extrusion.toml"), "--out", str(out),
+                 "--set", "penalty.dd=1"]) == 2
     assert "penalty.dd" in capsys.readouterr().err or RANK != 0
     broken = tmp_path / "broken.toml"
     broken.write_text("[process\nkind = 1\n")
@@ -170,7 +184,8 @@ def test_cli_rejects_bad_override_and_toml(tmp_path, capsys):
 
 
 def test_petsc_options_from_command_line():
-    assert petsc_options_from_args(["-ksp_type", "preonly", "-ksp_view", "-mat_mumps_icntl_14", "-50"]) == {
+    assert petsc_options_from_args(["-ksp_type", "preonly", "-ksp_view",
+                                    "-mat_mumps_icntl_14", "-50"]) == {
         "ksp_type": "preonly", "ksp_view": "", "mat_mumps_icntl_14": "-50"}
     with pytest.raises(SceneError):
         petsc_options_from_args(["ksp_type"])

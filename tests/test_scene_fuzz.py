@@ -18,16 +18,18 @@ pytestmark = pytest.mark.no_parallel_content  # pure Python (tests/conftest.py)
 
 DEMOS = sorted((Path(__file__).parents[1] / "demos").glob("*.toml"))
 BASES = [tomllib.loads(path.read_text()) for path in DEMOS]
-KNOWN_KEYS = sorted({key for base in BASES for table in base.values() for key in table} | {"law", "n", "rate_floor"})
+KNOWN_KEYS = sorted({key for base in BASES for table in base.values() for key in table}
+                    | {"law", "n", "rate_floor"})
 outcomes: collections.Counter = collections.Counter()
 
 scalars = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**6, 10**6), st.booleans(),
-    st.sampled_from(["Q1", "Q2", "reduced", "complete", "nodes", "centres", "direct", "modified", "extrusion",
-                     "drawing", "push", "pull", "rate_power", "hollomon", "voce", "piecewise_power", "averaged", "local", "penalty",
-                     "stress", "", "nan"]),
+    st.sampled_from(["Q1", "Q2", "reduced", "complete", "nodes", "centres", "direct", "modified",
+                     "extrusion", "drawing", "push", "pull", "rate_power", "hollomon", "voce",
+                     "piecewise_power", "averaged", "local", "penalty", "stress", "", "nan"]),
     st.text(max_size=8))
-values = st.one_of(scalars, st.lists(scalars, max_size=3), st.dictionaries(st.text(max_size=5), scalars, max_size=3))
+values = st.one_of(scalars, st.lists(scalars, max_size=3),
+                   st.dictionaries(st.text(max_size=5), scalars, max_size=3))
 keys = st.one_of(st.sampled_from(KNOWN_KEYS), st.text(max_size=10))
 
 
@@ -50,7 +52,8 @@ def check(data) -> None:
 @settings(max_examples=2000, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(base=st.sampled_from(BASES), choice=st.data())
 def test_mutated_demo_scenes(base, choice):
-    """One value of a demo scene replaced: mostly an existing key, sometimes any key of any section."""
+    """One value of a demo scene replaced: mostly an existing key, sometimes any key of any
+    section."""
     data = copy.deepcopy(base)
     existing = [(section, key) for section, table in data.items() for key in table]
     section, key = choice.draw(st.one_of(st.sampled_from(existing),
@@ -62,13 +65,15 @@ def test_mutated_demo_scenes(base, choice):
 
 @settings(max_examples=2000, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(data=st.dictionaries(st.one_of(st.sampled_from(list(SECTIONS)), st.text(max_size=6)),
-                            st.one_of(st.dictionaries(keys, values, max_size=6), scalars), max_size=6))
+                            st.one_of(st.dictionaries(keys, values, max_size=6), scalars),
+                            max_size=6))
 def test_random_scenes(data):
     check(data)
 
 
 def test_both_outcomes_were_exercised():
-    """Runs after the two property tests (file order): both paths must have been taken many times."""
+    """Runs after the two property tests (file order): both paths must have been taken many
+    times."""
     print(f"\ngenerated scenes: {dict(outcomes)}")
     # measured: 191 accepted of 4000 with hypothesis 6.67 (Debian 12), 88 with 6.130 (Debian 13)
     assert outcomes["accepted"] > 40 and outcomes["rejected"] > 1000

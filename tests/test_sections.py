@@ -1,4 +1,5 @@
-"""Section means of the axial stress (sections.py) and the element-wise L2 projection behind them."""
+"""Section means of the axial stress (sections.py) and the element-wise L2 projection behind
+them."""
 from __future__ import annotations
 
 import math
@@ -20,7 +21,8 @@ from forming_fenicsx.post.sections import mean_axial_stress, values_at
 def test_discontinuous_projection_is_exact_on_its_space_and_skips_the_axis():
     """x^2 y + y (in DQ2) is reproduced to rounding, and u_y/y with u_y = x y, 0/0 on the axis
     y = 0 for an interpolation, projects to x with no NaN."""
-    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 3, 4, dolfinx.mesh.CellType.quadrilateral)
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 3, 4,
+                                           dolfinx.mesh.CellType.quadrilateral)
     x = ufl.SpatialCoordinate(mesh)
     target = dolfinx.fem.Function(function_space(mesh, "DP", 2))
     project_discontinuous(x[0] ** 2 * x[1] + x[1], target, 4)

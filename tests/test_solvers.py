@@ -1,5 +1,5 @@
-"""Secant iteration control: stall detection, and a clear stop where large friction makes the modified
-method oscillate; the factorisation each method uses and why."""
+"""Secant iteration control: stall detection, and a clear stop where large friction makes the
+modified method oscillate; the factorisation each method uses and why."""
 import json
 
 import numpy as np
@@ -30,14 +30,16 @@ def test_stalled():
 
 def test_large_friction_oscillation_stops_with_a_clear_message(shared_tmp, capsys):
     out = shared_tmp / "mu1"
-    code = main(["run", str(DEMOS / "example2_drawing.toml"), "--out", str(out), "--quiet", "--set", "friction.mu=1.0",
+    code = main(["run", str(DEMOS / "example2_drawing.toml"), "--out", str(out), "--quiet",
+                 "--set", "friction.mu=1.0",
                  "--set", "discretisation.mesh_size=0.15", "--set", "output.fields=false",
                  "--set", "output.figures=false"])
     MPI.COMM_WORLD.barrier()
     assert code == 3
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False
-    assert ("oscillates" in summary["reason"] or "diverging" in summary["reason"]) and "not be unique" in summary["reason"]
+    assert (("oscillates" in summary["reason"] or "diverging" in summary["reason"])
+            and "not be unique" in summary["reason"])
     assert summary["outer_iterations"] < summary["scene"]["solver"]["max_outer_iterations"]
     assert (out / "history.csv").exists()
 
@@ -62,7 +64,8 @@ class _Injected:
             if injected.calls >= 3:
                 spoil(linear.problem.u, injected.calls)
         monkeypatch.setattr(LinearSolver, "solve", solve)
-        # a spoiled iterate is no solution of its system: keep the ill-conditioning check out of these tests
+        # a spoiled iterate is no solution of its system: keep the ill-conditioning check out of
+        # these tests
         monkeypatch.setattr(LinearSolver, "error_estimate", lambda linear: 0.0)
 
 
@@ -87,14 +90,16 @@ def test_growing_increment_stops_at_once(monkeypatch):
 
 
 def test_ill_conditioned_penalty_stops_with_a_clear_message():
-    """d = 1e-13 makes K so stiff that the estimated error of a linear solve exceeds 10 delta: the run
-    says so after two solves instead of stalling; d = 1e-8 converges with a small estimate (3e-8) and
-    the same ram pressure as d = 1e-6."""
+    """d = 1e-13 makes K so stiff that the estimated error of a linear solve exceeds 10 delta: the
+    run says so after two solves instead of stalling; d = 1e-8 converges with a small estimate
+    (3e-8) and the same ram pressure as d = 1e-6."""
     stiff = solve_scene(make_scene(penalty={"d": 1e-13}, discretisation={"mesh_size": 0.5}))
     assert not stiff[1].converged and stiff[1].linear_solves <= 3
-    assert stiff[1].reason.startswith("ill-conditioned linear systems") and "penalty.d = 1e-13" in stiff[1].reason
+    assert (stiff[1].reason.startswith("ill-conditioned linear systems")
+            and "penalty.d = 1e-13" in stiff[1].reason)
     assert stiff[2]["solve_error_estimate"] > 1e-3
-    fine, reference = (solve_scene(make_scene(penalty={"d": d}, discretisation={"mesh_size": 0.5}))[2]
+    fine, reference = (solve_scene(make_scene(penalty={"d": d},
+                                              discretisation={"mesh_size": 0.5}))[2]
                        for d in (1e-8, 1e-6))
     assert fine["converged"] and 1e-10 < fine["solve_error_estimate"] < 1e-6
     assert fine["ram_pressure"] == pytest.approx(reference["ram_pressure"], rel=1e-5)
@@ -110,17 +115,21 @@ def asymmetry(A) -> float:
 
 @pytest.mark.parametrize("quantity, sections", [
     ("ram_pressure", {"discretisation": {"mesh_size": 0.5}}),
-    ("mean_die_pressure", {"process": {"kind": "drawing"}, "friction": {"mu": 0.2},  # contact, averaged friction
-                           "discretisation": {"mesh_size": 0.15, "element": "Q2", "volumetric_integration": "reduced"}}),
+    # contact, averaged friction
+    ("mean_die_pressure", {"process": {"kind": "drawing"}, "friction": {"mu": 0.2},
+                           "discretisation": {"mesh_size": 0.15, "element": "Q2",
+                                              "volumetric_integration": "reduced"}}),
 ])
 def test_penalty_secant_systems_are_symmetric_and_cholesky_gives_the_lu_answer(quantity, sections):
-    """The secant methods factorise the penalty system b(w; u, v) by Cholesky by default, which needs it
-    symmetric: at the converged iterate (contact and friction active) ||A - A^T|| is rounding, and the
-    answer is LU's after as many solves (measured: 6e-12 and 3.1e-9 apart, delta = 1e-6)."""
+    """The secant methods factorise the penalty system b(w; u, v) by Cholesky by default, which
+    needs it symmetric: at the converged iterate (contact and friction active) ||A - A^T|| is
+    rounding, and the answer is LU's after as many solves (measured: 6e-12 and 3.1e-9 apart,
+    delta = 1e-6)."""
     values = {}
     for pc_type in ("cholesky", "lu"):
-        scene = make_scene(**sections, solver={"method": "direct", "tolerance": 1e-6, "max_iterations": 1000,
-                                               "petsc_options": {} if pc_type == "cholesky" else {"pc_type": "lu"}})
+        scene = make_scene(**sections, solver={
+            "method": "direct", "tolerance": 1e-6, "max_iterations": 1000,
+            "petsc_options": {} if pc_type == "cholesky" else {"pc_type": "lu"}})
         problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
         solver = SecantSolver(problem)
         assert solver.linear.ksp.getPC().getType() == pc_type
@@ -131,13 +140,15 @@ def test_penalty_secant_systems_are_symmetric_and_cholesky_gives_the_lu_answer(q
         values[pc_type] = (scalars(problem)[quantity], result.linear_solves)
         solver.destroy()
     assert values["cholesky"][1] == values["lu"][1]
-    assert values["cholesky"][0] == pytest.approx(values["lu"][0], rel=1e-7)  # rounding, far below delta
+    # rounding, far below delta
+    assert values["cholesky"][0] == pytest.approx(values["lu"][0], rel=1e-7)
 
 
 def test_mixed_secant_system_is_factorised_by_lu():
     """The mixed saddle point is symmetric but indefinite: LU by default (an L D L^T with pivoting
     failed on it in Example 2 with friction, needing ever more delayed pivots)."""
-    scene = make_scene(discretisation={"mesh_size": 0.5, "formulation": "mixed"}, solver={"method": "direct"})
+    scene = make_scene(discretisation={"mesh_size": 0.5, "formulation": "mixed"},
+                       solver={"method": "direct"})
     problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = SecantSolver(problem)
     assert solver.linear.ksp.getPC().getType() == "lu" and not solver.linear.positive_definite
@@ -156,12 +167,14 @@ def dense(A) -> np.ndarray:
 
 
 def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
-    """Newton's symmetrised primal-dual operator, with contact and averaged friction active and a dual
-    stress apart from tau(u) (after two Newton steps), is symmetric and positive definite, and shares
-    the secant start's Cholesky factorisation. Positive definiteness rests on the cap |tau_h| <= sigma_p:
-    with the dual three times tau(u) the same operator has negative eigenvalues."""
+    """Newton's symmetrised primal-dual operator, with contact and averaged friction active and a
+    dual stress apart from tau(u) (after two Newton steps), is symmetric and positive definite, and
+    shares the secant start's Cholesky factorisation. Positive definiteness rests on the cap
+    |tau_h| <= sigma_p: with the dual three times tau(u) the same operator has negative
+    eigenvalues."""
     scene = make_scene(process={"kind": "drawing"}, friction={"mu": 0.2},
-                       discretisation={"mesh_size": 0.3, "element": "Q2", "volumetric_integration": "reduced",
+                       discretisation={"mesh_size": 0.3, "element": "Q2",
+                                       "volumetric_integration": "reduced",
                                        "averaging": "quadrature"},
                        solver={"method": "newton", "max_iterations": 2})
     problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
@@ -183,8 +196,10 @@ def test_newton_operator_is_symmetric_positive_definite_under_the_cap():
 
 
 def test_mixed_newton_operator_is_factorised_by_lu():
-    """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the secant's."""
-    scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature", "formulation": "mixed"},
+    """With the mixed formulation Newton's operator is a symmetric saddle point: LU, as the
+    secant's."""
+    scene = make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature",
+                                       "formulation": "mixed"},
                        solver={"method": "newton", "max_iterations": 1})
     problem = coupled_problem(scene, build_mesh(scene, MPI.COMM_WORLD))
     solver = NewtonSolver(problem)
@@ -197,12 +212,14 @@ def test_mixed_newton_operator_is_factorised_by_lu():
 
 @pytest.mark.parametrize("method", ["direct", "newton"])
 def test_solve_error_is_sampled_on_solves_1_2_4_8_and_the_last(method):
-    """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear solves
-    1, 2, 4, 8, ... and on the last one of a converged run; the summary's value is the largest of those."""
-    problem, result, summary = solve_scene(make_scene(discretisation={"mesh_size": 0.5, "averaging": "quadrature"},
-                                                      solver={"method": method}))
+    """The iterative-refinement estimate (a pair of triangular solves) runs on the run's linear
+    solves 1, 2, 4, 8, ... and on the last one of a converged run; the summary's value is the
+    largest of those."""
+    problem, result, summary = solve_scene(make_scene(
+        discretisation={"mesh_size": 0.5, "averaging": "quadrature"}, solver={"method": method}))
     assert result.converged and len(result.history) == result.linear_solves > 8
-    sampled = [number for number, record in enumerate(result.history, start=1) if not np.isnan(record.solve_error)]
+    sampled = [number for number, record in enumerate(result.history, start=1)
+               if not np.isnan(record.solve_error)]
     last = result.linear_solves
     assert sampled == sorted({2**k for k in range(last.bit_length()) if 2**k <= last} | {last})
     estimates = [result.history[n - 1].solve_error for n in sampled]

@@ -1,6 +1,6 @@
-"""Stability at the extremes (docs/stability.md): each run converges to a finite result with a bounded,
-explained change, or stops or warns with a specific message. Coarse meshes: Example 1 at h = 0.5,
-Example 2 (Q2 reduced, direct method) at h = 0.1."""
+"""Stability at the extremes (docs/stability.md): each run converges to a finite result with a
+bounded, explained change, or stops or warns with a specific message. Coarse meshes: Example 1 at
+h = 0.5, Example 2 (Q2 reduced, direct method) at h = 0.1."""
 import math
 
 import pytest
@@ -15,37 +15,43 @@ ALPHA = 1e-3
 
 def drawing(**sections) -> dict:
     """Example 2's scene (paper constants) on the coarse mesh, mu = 0.2 unless given."""
-    sections["discretisation"] = {"mesh_size": 0.1, "element": "Q2", "volumetric_integration": "reduced",
+    sections["discretisation"] = {"mesh_size": 0.1, "element": "Q2",
+                                  "volumetric_integration": "reduced",
                                   **sections.get("discretisation", {})}
     sections["solver"] = {"method": "direct", "force_tolerance": 1e-3, "max_iterations": 500,
                           **sections.get("solver", {})}
     sections["friction"] = {"mu": 0.2, **sections.get("friction", {})}
-    return solve_scene(make_scene(process={"kind": "drawing", **sections.pop("process", {})}, **sections))[2]
+    return solve_scene(make_scene(process={"kind": "drawing", **sections.pop("process", {})},
+                                  **sections))[2]
 
 
 def test_penalty_d_from_1e_1_to_1e_8():
-    """d = 1e-8 converges to the d -> 0 limit (measured +0.17 % from d = 1e-3); d = 1e-1 converges too,
-    but its material compresses (||div u||/||e(u)|| = 0.60): a failed check, named with its cause."""
+    """d = 1e-8 converges to the d -> 0 limit (measured +0.17 % from d = 1e-3); d = 1e-1 converges
+    too, but its material compresses (||div u||/||e(u)|| = 0.60): a failed check, named with its
+    cause."""
     base = solved()["ram_pressure"]
     stiff = solved(penalty={"d": 1e-8})
     assert stiff["converged"] and stiff["ram_pressure"] == pytest.approx(base, rel=5e-3)
     assert stiff["relative_divergence"] < 1e-6 and not stiff["warnings"]
     soft = solved(penalty={"d": 1e-1})
-    assert soft["iteration_converged"] and soft["relative_divergence"] > 0.5 and not soft["converged"]
-    assert any("the material compresses" in w and "penalty.d = 0.1" in w for w in soft["failed_checks"])
+    assert (soft["iteration_converged"] and soft["relative_divergence"] > 0.5
+            and not soft["converged"])
+    assert any("the material compresses" in w and "penalty.d = 0.1" in w
+               for w in soft["failed_checks"])
     assert solved()["relative_divergence"] < 0.01  # the paper's d = 1e-3: 0.6 %
 
 
 def test_newtonian_alpha_one_first_iterate_is_the_answer():
-    """alpha = 1 makes G = A constant (inside [rate1, rate2] and, clipped, outside): the first linear
-    solve is the answer up to the contact active set, which starts as the whole die face; the second
-    solve drops the separating points (an increment of 2.7e-7 that scales with d_N: 2.7e-9 at d_N
-    100 times smaller) and the third changes nothing: its increment is rounding (1e-15 to 1e-14, the
-    order varying with MUMPS' parallel scheduling), bounded here by 1e-12, far below the second's."""
+    """alpha = 1 makes G = A constant (inside [rate1, rate2] and, clipped, outside): the first
+    linear solve is the answer up to the contact active set, which starts as the whole die face; the
+    second solve drops the separating points (an increment of 2.7e-7 that scales with d_N: 2.7e-9 at
+    d_N 100 times smaller) and the third changes nothing: its increment is rounding (1e-15 to 1e-14,
+    the order varying with MUMPS' parallel scheduling), bounded here by 1e-12, far below the
+    second's."""
     increments = {}
     for d_n in (1e-6, 1e-8):
-        scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5}, penalty={"d_N": d_n},
-                           solver={"tolerance": 1e-10})
+        scene = make_scene(material={"alpha": 1.0}, discretisation={"mesh_size": 0.5},
+                           penalty={"d_N": d_n}, solver={"tolerance": 1e-10})
         result = solve_scene(scene)[1]
         assert result.converged and result.linear_solves == 3
         increments[d_n] = [record.increment for record in result.history]
@@ -55,8 +61,8 @@ def test_newtonian_alpha_one_first_iterate_is_the_answer():
 
 @pytest.mark.parametrize("alpha", [1e-4, 0.1])
 def test_rate_sensitivity_extremes(alpha):
-    """alpha = 1e-4 changes the ram pressure by 0.09 %, alpha = 0.1 lowers it by 9 % (the rates in the
-    die zone are below 1, where sigma_p = A rate**alpha < A)."""
+    """alpha = 1e-4 changes the ram pressure by 0.09 %, alpha = 0.1 lowers it by 9 % (the rates in
+    the die zone are below 1, where sigma_p = A rate**alpha < A)."""
     result = solved(material={"alpha": alpha})
     assert result["converged"]
     change = result["ram_pressure"] / solved()["ram_pressure"] - 1
@@ -65,13 +71,13 @@ def test_rate_sensitivity_extremes(alpha):
 
 @pytest.mark.parametrize("lam", [1e-3, 1e6])
 def test_consistent_velocity_scaling_scales_stresses_by_lam_to_the_alpha(lam):
-    """u -> lam u with the rate window and the penalties (d, d_N, d_T times lam**(1 - alpha)) scaled along
-    is the same problem with stresses times lam**alpha: measured to 1e-11 relative."""
+    """u -> lam u with the rate window and the penalties (d, d_N, d_T times lam**(1 - alpha)) scaled
+    along is the same problem with stresses times lam**alpha: measured to 1e-11 relative."""
     base = solved(solver={"method": "direct"})
     scale = lam ** (1 - ALPHA)
     scaled = solved(process={"velocity": lam}, material={"rate1": 1e-3 * lam, "rate2": 1e3 * lam},
-                    penalty={"d": 1e-3 * scale, "d_N": 1e-6 * scale}, friction={"d_T": 1e-6 * scale},
-                    solver={"method": "direct"})
+                    penalty={"d": 1e-3 * scale, "d_N": 1e-6 * scale},
+                    friction={"d_T": 1e-6 * scale}, solver={"method": "direct"})
     assert scaled["converged"] and scaled["linear_solves"] == base["linear_solves"]
     assert scaled["ram_pressure"] == pytest.approx(base["ram_pressure"] * lam ** ALPHA, rel=1e-8)
 
@@ -81,15 +87,17 @@ def test_velocity_alone_scaled_down_warns_of_a_weak_penalty():
     thousandfold against 1/d: the material compresses (measured ||div u||/||e(u)|| = 0.92), a failed
     check naming the soft penalty; the work done below rate1 is named too."""
     result = solved(process={"velocity": 1e-3})
-    assert result["iteration_converged"] and not result["converged"] and result["relative_divergence"] > 0.5
-    assert any("the material compresses" in w and "a soft volumetric penalty" in w for w in result["failed_checks"])
+    assert (result["iteration_converged"] and not result["converged"]
+            and result["relative_divergence"] > 0.5)
+    assert any("the material compresses" in w and "a soft volumetric penalty" in w
+               for w in result["failed_checks"])
     assert any("below material.rate1" in w for w in result["warnings"])
 
 
 @pytest.mark.parametrize("rate1", [1e-6, 1e-1])
 def test_rate1_extremes(rate1):
-    """rate1 from 1e-6 (secant bound eta_2 = 1e6 A: stiff rigid zones) to 1e-1: converged, ram pressure
-    within 3 % (measured +0.22 % and -2.7 %)."""
+    """rate1 from 1e-6 (secant bound eta_2 = 1e6 A: stiff rigid zones) to 1e-1: converged, ram
+    pressure within 3 % (measured +0.22 % and -2.7 %)."""
     result = solved(material={"rate1": rate1})
     assert result["converged"]
     assert result["ram_pressure"] == pytest.approx(solved()["ram_pressure"], rel=0.03)
@@ -129,8 +137,8 @@ def test_large_friction_converges_with_the_force_balance():
 
 
 def test_extrusion_reductions_5_to_80_percent():
-    """Ram pressure above the ideal-work bound 2k ln(H/h) and rising with the reduction (measured 0.554,
-    2.957, 5.468 at 5, 50 and 80 %), force balance closed."""
+    """Ram pressure above the ideal-work bound 2k ln(H/h) and rising with the reduction (measured
+    0.554, 2.957, 5.468 at 5, 50 and 80 %), force balance closed."""
     pressures = []
     for reduction in (0.05, 0.5, 0.8):
         result = solved(geometry={"exit_thickness": 10 * (1 - reduction)})

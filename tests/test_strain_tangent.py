@@ -1,6 +1,6 @@
 """The transported strain in Newton's step (strain_tangent.py): J = A - B D^-1 C is the derivative
-of the coupled residual F(u, eps(u)); with it Newton converges the cold rod demo in fewer solves than
-the staggered coupling did, and the plane-strain wedge hardening from zero strain, where the
+of the coupled residual F(u, eps(u)); with it Newton converges the cold rod demo in fewer solves
+than the staggered coupling did, and the plane-strain wedge hardening from zero strain, where the
 staggered coupling did not converge."""
 import math
 from pathlib import Path

@@ -122,9 +122,9 @@ def test_a_lost_streamline_takes_the_transported_strain(steel, monkeypatch, capl
 
 def test_the_next_pass_reads_the_written_profile(steel, shared_tmp):
     """exit_strain.csv as run.py writes it is the next pass's inflow: its strain at the entry
-    (the strain field's entry_strain, what the streamlines start from) and the transported strain's inflow
-    are the written profile, the outermost element's mean at the surface; a point on the entry
-    section keeps it (no strain gained)."""
+    (the strain field's entry_strain, what the streamlines start from) and the transported strain's
+    inflow are the written profile, the outermost element's mean at the surface; a point on the
+    entry section keeps it (no strain gained)."""
     from forming_fenicsx.core.units import Units
 
     _, _, profile = steel

@@ -1,5 +1,5 @@
-"""`forming study`: the grid, errors against the exact value or a Richardson extrapolation, costs, the
-Pareto plot, and a restarted study that skips the runs it has."""
+"""`forming study`: the grid, errors against the exact value or a Richardson extrapolation, costs,
+the Pareto plot, and a restarted study that skips the runs it has."""
 import csv
 import json
 import math
@@ -20,8 +20,8 @@ SIZES = "discretisation.mesh_size=1.0,0.5,0.25"
 
 def test_study_against_hill_and_resumption(shared_tmp, monkeypatch):
     out = shared_tmp / "study"
-    assert main(["study", DEMO, "--vary", SIZES, "--vary", "solver.method=direct,modified", "--out", str(out),
-                 "--quiet", "--set", "solver.tolerance=1e-3"]) == 0
+    assert main(["study", DEMO, "--vary", SIZES, "--vary", "solver.method=direct,modified",
+                 "--out", str(out), "--quiet", "--set", "solver.tolerance=1e-3"]) == 0
     MPI.COMM_WORLD.barrier()
     with (out / "study.csv").open() as stream:
         rows = list(csv.DictReader(stream))
@@ -32,7 +32,8 @@ def test_study_against_hill_and_resumption(shared_tmp, monkeypatch):
         assert float(row["ram_pressure_reference"]) == pytest.approx(hill, rel=1e-12)
         error = abs(float(row["ram_pressure"]) / hill - 1)
         assert float(row["ram_pressure_relative_error"]) == pytest.approx(error, rel=1e-12)
-        assert int(row["linear_solves"]) > 0 and float(row["wall_time_s"]) > 0 and int(row["dofs"]) > 0
+        assert (int(row["linear_solves"]) > 0 and float(row["wall_time_s"]) > 0
+                and int(row["dofs"]) > 0)
     errors = [float(r["ram_pressure_relative_error"]) for r in rows
               if r["solver.method"] == "direct"]
     assert errors[0] > errors[1] > errors[2]
@@ -49,11 +50,13 @@ def test_study_against_hill_and_resumption(shared_tmp, monkeypatch):
 
 def test_study_richardson_reference(shared_tmp):
     out = shared_tmp / "richardson"
-    rows = study.run_study(read_scene_data(DEMO, ["solver.method=direct"]), [SIZES], out, quantity="die_force_x")
+    rows = study.run_study(read_scene_data(DEMO, ["solver.method=direct"]), [SIZES], out,
+                           quantity="die_force_x")
     limit = rows[0]["reference"]["die_force_x"]["value"]
     assert rows[0]["reference"]["die_force_x"]["kind"].startswith("richardson")
     forces = [r["die_force_x"] for r in rows]
-    assert forces[0] > forces[1] > forces[2] > limit  # converging from above to the extrapolated value
+    # converging from above to the extrapolated value
+    assert forces[0] > forces[1] > forces[2] > limit
     MPI.COMM_WORLD.barrier()
     stored = json.loads((out / "study.json").read_text())
     assert stored["quantities"] == ["die_force_x"] and stored["kind"] == "speed-accuracy"
@@ -71,8 +74,10 @@ def test_study_file_and_the_exact_drawing_reference(shared_tmp):
     exact-field drawing scene the reference is Hill's 2k(1 + a) r for the drawing stress."""
     path = shared_tmp / "tiny.study.toml"
     if MPI.COMM_WORLD.rank == 0:
-        path.write_text(f'[study]\nscene = "{DEMOS / "example2_exact_field.toml"}"\nquantity = "drawing_stress"\n'
-                        'set = ["discretisation.mesh_size=0.1"]\n[study.vary]\n"solver.method" = ["direct"]\n')
+        path.write_text(f'[study]\nscene = "{DEMOS / "example2_exact_field.toml"}"\n'
+                        'quantity = "drawing_stress"\n'
+                        'set = ["discretisation.mesh_size=0.1"]\n'
+                        '[study.vary]\n"solver.method" = ["direct"]\n')
     MPI.COMM_WORLD.barrier()
     assert main(["study", str(path), "--out", str(shared_tmp / "out"), "--quiet"]) == 0
     MPI.COMM_WORLD.barrier()
@@ -80,10 +85,12 @@ def test_study_file_and_the_exact_drawing_reference(shared_tmp):
     row = {**row, **row["reference"]["drawing_stress"]}
     angle = math.radians(6.0)
     r = 2 * math.sin(angle) / (1 + 2 * math.sin(angle))
-    k = 100.0  # A / sqrt(3): sigma_p at rate 1, as study.exact_value takes it (the rigid-plastic limit)
+    # A / sqrt(3): sigma_p at rate 1, as study.exact_value takes it (the rigid-plastic limit)
+    k = 100.0
     assert row["kind"] == "exact"
     assert row["value"] == pytest.approx(2 * k * (1 + angle) * r, rel=1e-12)
-    assert 0.1 < row["relative_error"] < 0.4  # measured +23.5 % on this coarse mesh (47.18 against 38.20)
+    # measured +23.5 % on this coarse mesh (47.18 against 38.20)
+    assert 0.1 < row["relative_error"] < 0.4
 
 
 @pytest.mark.parametrize("text, key", [
@@ -104,17 +111,20 @@ def test_bad_study_file_names_the_key(shared_tmp, text, key):
 
 @pytest.mark.parametrize("path", sorted(DEMOS.glob("*.study.toml")), ids=lambda p: p.name)
 def test_demo_study_files_are_valid(path):
-    """Every study file of demos/ loads and every scene of its grid passes validation (nothing solved)."""
+    """Every study file of demos/ loads and every scene of its grid passes validation (nothing
+    solved)."""
     data, vary, _ = study.load_study(path)
     base, combinations, scenes = study.study_scenes(data, vary)
-    assert len(scenes) == len(combinations) == math.prod(len(values) for _, values in study.parse_vary(vary)) >= 4
+    assert len(scenes) == len(combinations) == math.prod(
+        len(values) for _, values in study.parse_vary(vary)) >= 4
     for combination, scene in zip(combinations, scenes, strict=True):
         settings = dict(o.split("=", 1) for o in combination)
         if "discretisation.mesh_size" in settings:
             assert scene.discretisation.mesh_size == float(settings["discretisation.mesh_size"])
         if "friction.mu" in settings:
             assert scene.friction.mu == float(settings["friction.mu"])
-    if "newton" in path.name:  # the solve-count studies run Newton with the secant at the Gauss points
+    # the solve-count studies run Newton with the secant at the Gauss points
+    if "newton" in path.name:
         assert base.solver.method == "newton" and base.discretisation.averaging == "quadrature"
 
 

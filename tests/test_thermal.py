@@ -19,8 +19,8 @@ from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import load_scene, read_scene_data, scene_from_dict
 from forming_fenicsx.coupled.thermal import (TemperatureField, ThermalMaterial, effusivity_share,
                                      scene_temperature_field)
-from forming_fenicsx.verification.thermal_verification import (LEFT, RIGHT, adiabatic, layer, manufactured,
-                                                  orders, rectangle)
+from forming_fenicsx.verification.thermal_verification import (LEFT, RIGHT, adiabatic, layer,
+                                                                manufactured, orders, rectangle)
 
 PECLET = (1e1, 1e2, 1e3, 1e4, 1e5)
 
@@ -243,9 +243,10 @@ def test_softening_hardening_law_reads_the_temperature():
     factor stays 1; strain and temperature coupled at every Newton step. On this test's mesh, h =
     0.15 mm as the schedule's (measured on 1 and 2 ranks): 9.07 K, 1.2 % (40.43 against 40.90 MPa),
     20 and 20 Newton solves, 2.7 s (h = 0.1: 5.0 s, the cold run 42 solves)."""
-    data = read_scene_data(Path(__file__).resolve().parents[1] / "demos" / "copper_wire_pass.toml", [
-        "output.fields=false", "output.figures=false", "material.softening=0.002",
-        "material.softening_temperature=293.15", "discretisation.mesh_size=0.15"])
+    data = read_scene_data(
+        Path(__file__).resolve().parents[1] / "demos" / "copper_wire_pass.toml",
+        ["output.fields=false", "output.figures=false", "material.softening=0.002",
+         "material.softening_temperature=293.15", "discretisation.mesh_size=0.15"])
     cold = solve_scene(scene_from_dict(data))[2]
     data["thermal"] = {"heat_capacity": 3.45, "conductivity": 400.0, "inflow_temperature": 293.15}
     hot = solve_scene(scene_from_dict(data))[2]
@@ -266,4 +267,5 @@ def test_a_hot_run_that_melts_fails_naming_the_solidus():
     assert summary["iteration_converged"] and not summary["converged"]
     assert summary["max_temperature"] > scene.thermal.solidus == 888.0
     assert "above the solidus" not in summary["reason"]
-    assert "of its solidus 888.0 K (614.9 C)" in summary["reason"] and "it melts" in summary["reason"]
+    assert ("of its solidus 888.0 K (614.9 C)" in summary["reason"]
+            and "it melts" in summary["reason"])

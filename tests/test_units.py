@@ -1,7 +1,7 @@
-"""Right answers in any consistent units: the default (relative) penalties make a run's dimensionless
-results independent of the unit system and, for a rate power law, of the velocity but for the law's
-own rate factor; the old absolute penalties in the wrong units end with a failed check, not a
-converged wrong answer."""
+"""Right answers in any consistent units: the default (relative) penalties make a run's
+dimensionless results independent of the unit system and, for a rate power law, of the velocity but
+for the law's own rate factor; the old absolute penalties in the wrong units end with a failed
+check, not a converged wrong answer."""
 import math
 import sys
 from pathlib import Path
@@ -30,13 +30,14 @@ def checked(kind: str, system: str, velocity: float) -> tuple[float, float]:
 
 @pytest.mark.parametrize("kind", ["drawing", "extrusion"])
 def test_three_unit_systems_and_velocities_1e_3_to_1e3_give_one_dimensionless_answer(kind):
-    """Measured: drawing sigma_d/sigma0 = 0.41303 (115.6 MPa at 1 mm/s), extrusion p/sigma0 = 1.77449;
-    the systems and velocities agree to 1e-7. The stress itself scales by lam^n = 1000^0.1 = 1.9953
-    from 1 to 1000 mm/s."""
+    """Measured: drawing sigma_d/sigma0 = 0.41303 (115.6 MPa at 1 mm/s), extrusion
+    p/sigma0 = 1.77449; the systems and velocities agree to 1e-7. The stress itself scales by
+    lam^n = 1000^0.1 = 1.9953 from 1 to 1000 mm/s."""
     base, stress = checked(kind, "mm", 1.0)
     for system in ("m", "in"):
         other, other_stress = checked(kind, system, 1.0)
-        assert other == pytest.approx(base, rel=1e-6) and other_stress == pytest.approx(stress, rel=1e-6)
+        assert (other == pytest.approx(base, rel=1e-6)
+                and other_stress == pytest.approx(stress, rel=1e-6))
     for velocity in (1e-3, 1e3):
         other, other_stress = checked(kind, "mm", velocity)
         assert other == pytest.approx(base, rel=1e-6)
@@ -47,7 +48,8 @@ def test_three_unit_systems_and_velocities_1e_3_to_1e3_give_one_dimensionless_an
 
 def example2(velocity: float, paper_penalties: bool) -> dict:
     """Example 2 (mu = 0.2) on a coarse Q2 mesh at another drawing velocity."""
-    overrides = [f"process.velocity={velocity}", "discretisation.mesh_size=0.1", "discretisation.element=Q2",
+    overrides = [f"process.velocity={velocity}", "discretisation.mesh_size=0.1",
+                 "discretisation.element=Q2",
                  "discretisation.volumetric_integration=reduced", "solver.method=direct",
                  "output.fields=false", "output.figures=false"]
     data = read_scene_data(DEMOS / "example2_drawing_mu02.toml", overrides)
@@ -58,11 +60,12 @@ def example2(velocity: float, paper_penalties: bool) -> dict:
 
 
 def test_example2_at_velocity_1_right_by_default_and_a_clear_no_with_the_papers_penalties():
-    """The paper's d_N = 0.01 is absolute: at velocity 1 instead of 1000 the strip passed through the
-    die (q_av 10.44, drawing stress 0.87, reported converged). Now the run fails, naming d_N. With the
-    default relative penalties velocity 1 gives the answer of velocity 1000 over the rate factor
-    1000^alpha = 1.0069 of (4.5), within 1 % (measured on this mesh: 70.18 against 71.13 / 1.0069 =
-    70.64; the rest is the paper's penalties at 1000 and the work done above rate2 there)."""
+    """The paper's d_N = 0.01 is absolute: at velocity 1 instead of 1000 the strip passed through
+    the die (q_av 10.44, drawing stress 0.87, reported converged). Now the run fails, naming d_N.
+    With the default relative penalties velocity 1 gives the answer of velocity 1000 over the rate
+    factor 1000^alpha = 1.0069 of (4.5), within 1 % (measured on this mesh: 70.18 against
+    71.13 / 1.0069 = 70.64; the rest is the paper's penalties at 1000 and the work done above rate2
+    there)."""
     reference = example2(1000.0, paper_penalties=True)
     wrong = example2(1.0, paper_penalties=True)
     assert not wrong["converged"] and wrong["iteration_converged"]
@@ -71,19 +74,21 @@ def test_example2_at_velocity_1_right_by_default_and_a_clear_no_with_the_papers_
     assert right["converged"] and not right["failed_checks"]
     factor = 1000.0**1e-3
     assert right["drawing_stress"] == pytest.approx(reference["drawing_stress"] / factor, rel=0.01)
-    assert right["mean_die_pressure"] == pytest.approx(reference["mean_die_pressure"] / factor, rel=0.01)
+    assert right["mean_die_pressure"] == pytest.approx(reference["mean_die_pressure"] / factor,
+                                                       rel=0.01)
 
 
 @pytest.mark.parametrize("system", ["mm", "m"])
 def test_strip_in_mm_and_m_right_by_default_and_a_clear_no_with_old_absolute_penalties(system):
-    """demos/strip_mm.toml: 2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa at 1 mm/s
-    (default mesh, 30k unknowns, 4 s). With the old default
+    """demos/strip_mm.toml: 2.0 -> 1.6 mm, 10 degrees, mu = 0.08, law (4.5) with A = 300 MPa
+    at 1 mm/s (default mesh, 30k unknowns, 4 s). With the old default
     penalties (d = 0.005, d_N = 0.01 absolute) it gave 6.3 MPa (6.36 Pa in m), far below the ideal
-    work 2/sqrt3 300 ln(2/1.6) = 77.3 MPa; now that run fails with the cause, and the default penalties
-    give 120.0 MPa in both systems (measured 119.996; 121.37 and 122.89 at mesh_size_relative 0.1
-    and 0.15)."""
+    work 2/sqrt3 300 ln(2/1.6) = 77.3 MPa; now that run fails with the cause, and the default
+    penalties give 120.0 MPa in both systems (measured 119.996; 121.37 and 122.89 at
+    mesh_size_relative 0.1 and 0.15)."""
     length, stress, names = SYSTEMS[system]
-    common = read_scene_data(DEMOS / "strip_mm.toml", ["output.fields=false", "output.figures=false"])
+    common = read_scene_data(DEMOS / "strip_mm.toml",
+                             ["output.fields=false", "output.figures=false"])
     common["process"]["velocity"] /= length  # written in the other system
     for key in ("entry_thickness", "exit_thickness"):
         common["geometry"][key] /= length
@@ -92,16 +97,19 @@ def test_strip_in_mm_and_m_right_by_default_and_a_clear_no_with_old_absolute_pen
     right = solve_scene(scene_from_dict(common))[2]
     assert right["converged"] and not right["failed_checks"]
     assert right["drawing_stress"] * stress == pytest.approx(120.0, rel=2e-3)
-    wrong = solve_scene(scene_from_dict({**common, "penalty": {"d": 0.005, "d_N": 0.01, "augmented": False}}))[2]
+    wrong = solve_scene(scene_from_dict({**common, "penalty": {"d": 0.005, "d_N": 0.01,
+                                                               "augmented": False}}))[2]
     assert not wrong["converged"]
     assert any("penalty.d_N" in f for f in wrong["failed_checks"])
 
 
 def test_units_are_labels_checked_for_consistency():
     with pytest.raises(SceneError) as error:
-        scene_from_dict({"process": {"kind": "drawing"}, "units": {"length": "mm", "stress": "MPa", "force": "kN"}})
+        scene_from_dict({"process": {"kind": "drawing"},
+                         "units": {"length": "mm", "stress": "MPa", "force": "kN"}})
     assert error.value.key == "units.force" and "use N" in error.value.message
-    run = scene_from_dict({"process": {"kind": "drawing"}, "units": {"length": "in", "stress": "psi"}})
+    run = scene_from_dict({"process": {"kind": "drawing"},
+                           "units": {"length": "in", "stress": "psi"}})
     assert run.units.label("force_per_width") == "psi*in^2/in"
     assert run.units.label("velocity") is None  # no time unit given
 
@@ -137,7 +145,8 @@ def test_temperatures_and_large_stresses_as_figures_show_them():
 
 
 @pytest.mark.parametrize("key, value", [("material.A", math.inf), ("process.velocity", -math.inf),
-                                        ("geometry.die_angle", math.nan), ("penalty.d_relative", math.inf),
+                                        ("geometry.die_angle", math.nan),
+                                        ("penalty.d_relative", math.inf),
                                         ("friction.mu", math.nan), ("solver.tolerance", math.inf)])
 def test_non_finite_values_are_rejected_with_the_key(key, value):
     section, name = key.split(".")
@@ -149,7 +158,8 @@ def test_non_finite_values_are_rejected_with_the_key(key, value):
 
 def test_absolute_and_relative_penalty_together_are_refused():
     with pytest.raises(SceneError) as error:
-        scene_from_dict({"process": {"kind": "drawing"}, "penalty": {"d_N": 1e-3, "d_N_relative": 1e-3}})
+        scene_from_dict({"process": {"kind": "drawing"},
+                         "penalty": {"d_N": 1e-3, "d_N_relative": 1e-3}})
     assert error.value.key == "penalty.d_N" and "not both" in error.value.message
 
 
@@ -191,7 +201,8 @@ def test_a_strips_forces_are_the_whole_strips_per_unit_width_or_of_its_width():
 def test_an_extruded_strips_ram_force_is_the_whole_billets():
     """The ram force is the ram pressure times the whole entry thickness (per unit width)."""
     summary = solve_scene(scene_from_dict({
-        "process": {"kind": "extrusion"}, "geometry": {"entry_thickness": 10.0, "exit_thickness": 5.0},
+        "process": {"kind": "extrusion"},
+        "geometry": {"entry_thickness": 10.0, "exit_thickness": 5.0},
         "discretisation": {"mesh_size": 1.0, "averaging": "quadrature"},
         "solver": {"method": "newton"},
         "output": {"fields": False, "figures": False}}))[2]

@@ -1,5 +1,6 @@
-"""Scenes with their own Gmsh .msh file: a round trip of `forming mesh`, and clear messages for meshes
-with missing or overlapping roles, wrong dimension, unsupported cells or inverted elements."""
+"""Scenes with their own Gmsh .msh file: a round trip of `forming mesh`, and clear messages for
+meshes with missing or overlapping roles, wrong dimension, unsupported cells or inverted
+elements."""
 import gmsh
 import pytest
 from mpi4py import MPI
@@ -47,8 +48,8 @@ def _discrete_mesh(path, quads, roles, nodes=None):
 
 
 GOOD = [[1, 2, 5, 4], [2, 3, 6, 5]]
-ROLES = {"gamma1_velocity": [(1, 4)], "gamma6_symmetry": [(1, 2), (2, 3)], "gamma3_contact": [(4, 5), (5, 6)],
-         "gamma4_free": [(3, 6)]}
+ROLES = {"gamma1_velocity": [(1, 4)], "gamma6_symmetry": [(1, 2), (2, 3)],
+         "gamma3_contact": [(4, 5), (5, 6)], "gamma4_free": [(3, 6)]}
 
 
 def _gmsh_box(path):
@@ -71,7 +72,8 @@ def _triangles(path):
         gmsh.model.occ.addRectangle(0, 0, 0, 2, 1)
         gmsh.model.occ.synchronize()
         gmsh.model.addPhysicalGroup(2, [1], 1)
-        for tag, role in zip((1, 2, 3), ("gamma1_velocity", "gamma6_symmetry", "gamma3_contact"), strict=True):
+        for tag, role in zip((1, 2, 3), ("gamma1_velocity", "gamma6_symmetry", "gamma3_contact"),
+                             strict=True):
             gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [tag]), role)
         gmsh.model.mesh.generate(2)
         gmsh.write(str(path))
@@ -81,14 +83,20 @@ def _triangles(path):
 
 CASES = {
     "valid": (lambda p: _discrete_mesh(p, GOOD, ROLES), None),
-    "missing role": (lambda p: _discrete_mesh(p, GOOD, {k: v for k, v in ROLES.items() if k != "gamma1_velocity"}),
+    "missing role": (lambda p: _discrete_mesh(p, GOOD, {k: v for k, v in ROLES.items()
+                                                        if k != "gamma1_velocity"}),
                      "missing boundary roles ['gamma1_velocity']"),
-    "overlapping roles": (lambda p: _discrete_mesh(p, GOOD, {**ROLES, "gamma4_free": [(3, 6), (5, 6)]}),
-                          "overlapping roles: an edge belongs to both gamma3_contact and gamma4_free"),
-    "unknown role": (lambda p: _discrete_mesh(p, GOOD, {**ROLES, "wall": [(3, 6)]}), "unknown boundary role names"),
-    "inverted element": (lambda p: _discrete_mesh(p, [[1, 2, 5, 4], [2, 5, 6, 3]], ROLES), "inverted elements"),
-    "degenerate element": (lambda p: _discrete_mesh(p, GOOD, ROLES, nodes=[0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0,
-                                                                            1, 1, 0, 1, 1, 0]),
+    "overlapping roles": (lambda p: _discrete_mesh(p, GOOD,
+                                                   {**ROLES, "gamma4_free": [(3, 6), (5, 6)]}),
+                          "overlapping roles: an edge belongs to both gamma3_contact and "
+                          "gamma4_free"),
+    "unknown role": (lambda p: _discrete_mesh(p, GOOD, {**ROLES, "wall": [(3, 6)]}),
+                     "unknown boundary role names"),
+    "inverted element": (lambda p: _discrete_mesh(p, [[1, 2, 5, 4], [2, 5, 6, 3]], ROLES),
+                         "inverted elements"),
+    "degenerate element": (lambda p: _discrete_mesh(p, GOOD, ROLES,
+                                                    nodes=[0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0,
+                                                           1, 1, 0, 1, 1, 0]),
                            "degenerate elements"),
     "3-D mesh": (_gmsh_box, "a 3-D mesh"),
     "triangles": (_triangles, "unsupported cells (Triangle 3)"),
@@ -120,9 +128,9 @@ def test_missing_file_is_a_scene_error(tmp_path):
 
 
 def test_thicknesses_come_from_the_mesh_file(shared_tmp):
-    """A drawing mesh of a 1.625 -> 1.4 strip: the scene takes its thicknesses and length from the file
-    (the drawing stress divides by the mesh's exit half-thickness, not a default), refuses values that
-    disagree and die keys that cannot apply."""
+    """A drawing mesh of a 1.625 -> 1.4 strip: the scene takes its thicknesses and length from the
+    file (the drawing stress divides by the mesh's exit half-thickness, not a default), refuses
+    values that disagree and die keys that cannot apply."""
     built_in = make_scene(process={"kind": "drawing"}, geometry={"exit_thickness": 1.4},
                           discretisation={"mesh_size": 0.2})
     path = shared_tmp / "drawing.msh"
@@ -135,7 +143,8 @@ def test_thicknesses_come_from_the_mesh_file(shared_tmp):
     assert measured == pytest.approx((1.625, 1.4, built_in.geometry.length), rel=1e-9)
     assert own.geometry.thinnest == pytest.approx(0.7, rel=1e-9)
     with pytest.raises(SceneError) as error:
-        make_scene(process={"kind": "drawing"}, geometry={"mesh_file": str(path), "exit_thickness": 1.5})
+        make_scene(process={"kind": "drawing"},
+                   geometry={"mesh_file": str(path), "exit_thickness": 1.5})
     assert error.value.key == "geometry.exit_thickness" and "the mesh file" in error.value.message
     with pytest.raises(SceneError) as error:
         make_scene(process={"kind": "drawing"}, geometry={"mesh_file": str(path), "die_angle": 8.0})
