@@ -17,8 +17,8 @@ from forming_fenicsx.physics.coordinates import CoordinateSystem
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import load_scene, read_scene_data, scene_from_dict
-from forming_fenicsx.coupled.thermal import (TemperatureField, ThermalMaterial, effusivity_share,
-                                     scene_temperature_field)
+from forming_fenicsx.coupled.thermal import TemperatureField, ThermalMaterial, effusivity_share
+from forming_fenicsx.coupled.thermal_scene import scene_temperature_field
 from forming_fenicsx.verification.thermal_verification import (LEFT, RIGHT, adiabatic, layer,
                                                                 manufactured, orders, rectangle)
 

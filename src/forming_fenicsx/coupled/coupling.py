@@ -9,7 +9,7 @@ import numpy as np
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.config.strain_profile import profile_values, read_strain_profile
 from forming_fenicsx.coupled.strain_transport import TANGENT_FROM, StrainField, inflow_strain
-from forming_fenicsx.coupled.thermal import scene_temperature_field
+from forming_fenicsx.coupled.thermal_scene import scene_temperature_field
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
 
