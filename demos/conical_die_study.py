@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from forming_fenicsx.physics.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
-                                          avitzur_optimum_angle_approx, sachs_drawing_stress)
+                                                  avitzur_optimum_angle_approx,
+                                                  sachs_drawing_stress)
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import scene_from_dict

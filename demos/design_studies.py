@@ -15,7 +15,8 @@ import sys
 from pathlib import Path
 
 from forming_fenicsx.physics.closed_forms import (avitzur_drawing_stress, avitzur_optimum_angle,
-                                          strip_optimum_angle, upper_bound_strip_drawing_stress)
+                                                  strip_optimum_angle,
+                                                  upper_bound_strip_drawing_stress)
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.app.study import load_study, study_scenes
 

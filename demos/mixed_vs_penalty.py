@@ -61,8 +61,8 @@ def main() -> None:
     rank0 = MPI.COMM_WORLD.rank == 0
     rows = []
     for title, scene_file, settings, d0 in CASES:
-        problem, _, mixed = solve_scene(load_scene(scene_file, [*settings, *COMMON,
-                                                                "discretisation.formulation=mixed"]))
+        problem, _, mixed = solve_scene(load_scene(
+            scene_file, [*settings, *COMMON, "discretisation.formulation=mixed"]))
         reference = pressure_means(problem)
         quantity = "ram_pressure" if "ram_pressure" in mixed else "mean_die_pressure"
         case_rows = []

@@ -28,9 +28,9 @@ from forming_fenicsx.post.sections import mean_axial_stress
 ROOT = Path(__file__).resolve().parents[1]
 # the (angle, m) pairs of the reference's table of Shield's c/2, on a bar of radius 1 to 0.5 with
 # h = 0.05 and 0.025; the short cones of 15 and 30 degrees again to radius 0.25 (h = 0.0125)
-CASES = [(angle, m, 0.5, size) for angle, m in ((5.0, 0.1), (5.0, 0.5), (10.0, 0.1), (10.0, 0.2),
-                                               (10.0, 0.5), (15.0, 0.1), (15.0, 0.2), (30.0, 0.1),
-                                               (30.0, 0.5)) for size in (0.05, 0.025)]
+LONG_CONES = ((5.0, 0.1), (5.0, 0.5), (10.0, 0.1), (10.0, 0.2), (10.0, 0.5), (15.0, 0.1),
+              (15.0, 0.2), (30.0, 0.1), (30.0, 0.5))
+CASES = [(angle, m, 0.5, size) for angle, m in LONG_CONES for size in (0.05, 0.025)]
 CASES += [(angle, m, 0.25, 0.0125) for angle, m in ((15.0, 0.1), (15.0, 0.2), (30.0, 0.1),
                                                     (30.0, 0.5))]
 

@@ -159,8 +159,8 @@ def test_mean_exit_strain_balances_the_drawing_work():
     from forming_fenicsx import load_scene
     from forming_fenicsx.app.run import solve_scene
 
-    scene = load_scene(DEMOS / "strip_mm.toml", ["discretisation.mesh_size_relative=0.2",
-                                                  "friction.mu=0"])
+    scene = load_scene(DEMOS / "strip_mm.toml",
+                       ["discretisation.mesh_size_relative=0.2", "friction.mu=0"])
     summary = solve_scene(scene)[2]
     strain = summary["mean_exit_strain"]
     work = scene.scales.flow_stress * strain

@@ -57,7 +57,6 @@ def test_laws_breaking_2_10_are_rejected(law, key):
     assert error.value.key == key
 
 
-
 def hardening_laws():
     """One law of each hardening curve and rate factor."""
     from forming_fenicsx.physics.flow_laws import HollomonLaw, SwiftLaw, VoceLaw

@@ -291,8 +291,9 @@ def test_newton_ends_only_after_a_step_taken_in_full():
     assert newton["force_balance_residual"] < 1e-4
 
 
-@pytest.mark.parametrize("formulation, events", [("penalty", ("MatCholFctrSym", "MatCholFctrNum")),
-                                                  ("mixed", ("MatLUFactorSym", "MatLUFactorNum"))])
+@pytest.mark.parametrize("formulation, events", [
+    ("penalty", ("MatCholFctrSym", "MatCholFctrNum")),
+    ("mixed", ("MatLUFactorSym", "MatLUFactorNum"))])
 def test_newton_shares_the_secant_matrix_one_symbolic_factorisation(formulation, events):
     """The secant start and the Newton steps assemble into one matrix: MUMPS analyses its pattern
     once and factorises numerically once per linear solve (PETSc's event counts on this rank), by
@@ -370,8 +371,8 @@ def test_newton_falls_back_to_the_direct_method_on_a_1_degree_die():
     diverged while thousands of Gauss points switched the flow law's branch each step; the direct
     method converges (271.86 MPa; Sachs 270.3). Now Newton hands over to it from the secant
     start's iterate and says why (measured: 271.69 MPa in 31 solves)."""
-    scene = load_scene(DEMO.parent / "strip_mm.toml", ["geometry.die_angle=1.0",
-                                                     "output.figures=false"])
+    scene = load_scene(DEMO.parent / "strip_mm.toml",
+                       ["geometry.die_angle=1.0", "output.figures=false"])
     summary = solve_scene(scene)[2]
     assert summary["converged"] and not summary["failed_checks"]
     assert summary["solver_fallback"].startswith("Newton's method diverged")

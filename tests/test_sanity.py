@@ -125,8 +125,8 @@ def test_heat_checks(changed, check, failure):
 def test_a_molten_workpiece_is_refused_before_any_work():
     from forming_fenicsx.core.errors import SceneError
     with pytest.raises(SceneError) as error:
-        scene_from_dict({"process": {"kind": "extrusion"}, "material": {"name": "AA6063",
-                                                                      "temperature": 900.0},
+        scene_from_dict({"process": {"kind": "extrusion"},
+                         "material": {"name": "AA6063", "temperature": 900.0},
                          "discretisation": {"averaging": "quadrature"},
                          "units": {"stress": "MPa", "time": "s"}})
     assert error.value.key == "material.temperature" and "solidus" in error.value.message

@@ -374,6 +374,6 @@ def report() -> None:
                 field.destroy()
             say(f"Q{degree} {scheme:6} dofs {dofs:6} solve {seconds[0]:.3f} {seconds[1]:.3f}")
 
+
 if __name__ == "__main__":
     report()
-

@@ -20,7 +20,7 @@ from forming_fenicsx.config.loader import load_scene, read_scene_data, scene_fro
 from forming_fenicsx.coupled.thermal import TemperatureField, ThermalMaterial, effusivity_share
 from forming_fenicsx.coupled.thermal_scene import scene_temperature_field
 from forming_fenicsx.verification.thermal_verification import (LEFT, RIGHT, adiabatic, layer,
-                                                                manufactured, orders, rectangle)
+                                                               manufactured, orders, rectangle)
 
 PECLET = (1e1, 1e2, 1e3, 1e4, 1e5)
 

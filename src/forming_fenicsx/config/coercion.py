@@ -10,6 +10,7 @@ import dataclasses
 import json
 import math
 import types
+from types import NoneType
 import typing
 from typing import Any
 
@@ -20,7 +21,7 @@ def _typename(tp: Any) -> str:
     """A field type as messages name it ("a number or a string")."""
     names = {float: "a number", int: "an integer", str: "a string", bool: "true or false",
              dict: "a table"}
-    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    args = [a for a in typing.get_args(tp) if a is not NoneType]
     if args:
         return " or ".join(_typename(a) for a in args)
     return names.get(typing.get_origin(tp) or tp, str(tp))
@@ -32,7 +33,7 @@ def _coerce(key: str, value: Any, tp: Any) -> Any:
     if origin in (typing.Union, types.UnionType):
         errors = []
         for option in typing.get_args(tp):
-            if option is type(None):
+            if option is NoneType:
                 continue
             try:
                 return _coerce(key, value, option)

@@ -360,4 +360,3 @@ def geometry_class(kind: str, table: dict[str, Any]) -> type:
         raise SceneError("geometry.die",
                          f"must be one of {', '.join(dies)} for {kind}; got {die!r}")
     return dies[die]
-

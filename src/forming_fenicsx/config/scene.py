@@ -122,9 +122,10 @@ class Scene:
                              'discontinuous P1 pressure: it needs discretisation.element = "Q2"; '
                              f"got {self.discretisation.element!r}")
         thermal = self.thermal
-        if thermal is not None and self.geometry.mesh_file is not None and (
-                thermal.container_h, thermal.container_temperature) != (thermal.die_h,
-                                                                         thermal.die_temperature):
+        container = None if thermal is None else (thermal.container_h,
+                                                  thermal.container_temperature)
+        if thermal is not None and self.geometry.mesh_file is not None \
+                and container != (thermal.die_h, thermal.die_temperature):
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
         quantities = ACCURACY_QUANTITIES[self.process.kind]

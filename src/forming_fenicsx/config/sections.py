@@ -44,7 +44,6 @@ class Process:
             raise SceneError("process.drive", f"must be one of push, pull; got {self.drive!r}")
 
 
-
 NORMAL_STRESSES = ("averaged", "local")
 # Default relative values (docs/penalties.md measures them): d = D_RELATIVE rate0/sigma0,
 # d_N = D_N_RELATIVE U/sigma0, d_T = D_T_RELATIVE U.

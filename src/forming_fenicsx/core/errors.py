@@ -14,6 +14,5 @@ class SceneError(ValueError):
         return SceneError, (self.key, self.message)
 
 
-
 class LinearSolveError(RuntimeError):
     """A linear solve of the iteration failed; PETSc's reason is the same on every rank."""

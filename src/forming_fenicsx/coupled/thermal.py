@@ -269,8 +269,9 @@ class TemperatureField:
         # enthalpy from the initial (inflow) temperature: the volume a discrete flow gains or loses
         # (int div u) then carries T - T_ref, not T
         T_ref = self.reference_temperature
-        terms = {"advected": self.integral(rho_c * (ufl.dot(v, self.n) * (T - T_ref) + self.inflow
-                                                      * (T - self.inflow_temperature)), self.ds),
+        advected = rho_c * (ufl.dot(v, self.n) * (T - T_ref)
+                            + self.inflow * (T - self.inflow_temperature))
+        terms = {"advected": self.integral(advected, self.ds),
                  "plastic_power": plastic, "generated": beta * plastic}
         for exchange in self.exchanges:
             terms[f"exchange_{exchange.name}"] = sum(self.integral(

@@ -181,4 +181,3 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
                        dolfinx.fem.Expression(ufl.as_vector(secant_and_coupling(u)) * on_mesh,
                                               points),
                        step, previous, contact_set)
-

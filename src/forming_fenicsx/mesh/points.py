@@ -18,7 +18,7 @@ import dolfinx.geometry
 import numpy as np
 
 from forming_fenicsx.core.compat import (bounding_box_tree, cell_geometry_nodes, closest_cells,
-                                          colliding_cells)
+                                         colliding_cells)
 
 OUTSIDE = ("nan", "extend", "onto_cell")
 # a quadrilateral's boundary nodes in order around it (dolfinx's numbering: the vertices (0, 0),

@@ -469,4 +469,3 @@ def _check_positive(section: str, key: str, value: float | None) -> None:
 LAWS = {"piecewise_power": PiecewisePowerLaw, "rate_power": PowerLaw, "hollomon": HollomonLaw,
         "swift": SwiftLaw, "voce": VoceLaw, "sellars_tegart": SellarsTegartLaw}
 FlowLaw = PiecewisePowerLaw | PowerLaw | HollomonLaw | SwiftLaw | VoceLaw | SellarsTegartLaw
-

@@ -230,10 +230,10 @@ def lower_bound(geometry: DrawingGeometry, k: float, size_min: float, size_max: 
 
     # equilibrium in each triangle: div sigma = 0 with the constant gradients of the linear field
     b, c = _gradients(points, triangles)
-    equal.add([var[:, i] + j for i in range(3) for j in (0, 2)], [b[:, i] if j == 0 else c[:, i]
-                                                               for i in range(3) for j in (0, 2)])
-    equal.add([var[:, i] + j for i in range(3) for j in (2, 1)], [b[:, i] if j == 2 else c[:, i]
-                                                               for i in range(3) for j in (2, 1)])
+    equal.add([var[:, i] + j for i in range(3) for j in (0, 2)],
+              [b[:, i] if j == 0 else c[:, i] for i in range(3) for j in (0, 2)])
+    equal.add([var[:, i] + j for i in range(3) for j in (2, 1)],
+              [b[:, i] if j == 2 else c[:, i] for i in range(3) for j in (2, 1)])
 
     def traction(first: np.ndarray, n: np.ndarray, direction: np.ndarray) -> tuple[list, list]:
         """Columns and coefficients of direction . sigma n at the vertices whose unknowns start at

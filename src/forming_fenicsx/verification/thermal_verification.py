@@ -83,7 +83,6 @@ def layer(peclet: float, cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORL
             "cell_peclet": peclet / (2 * cells)}
 
 
-
 # -- manufactured solutions ---------------------------------------------------------------------
 # On the unit square, x the flow (axis) direction, y the half-thickness (radius): the flow
 # u = (1 + a sin(pi x), -y a pi cos(pi x) / m) (m = 2 axisymmetric, 1 plane), divergence-free in its
@@ -168,16 +167,16 @@ def adiabatic(symmetry: str, degree: int, cells: int, softening: float | None = 
     exact rise, the freezes and the heat balance (without softening, the global one too: the
     drawing power W times the throughput against the heat carried out and the work stored)."""
     from forming_fenicsx.core.roles import ROLES
-    from forming_fenicsx.verification.verification import (RADIAL, radial_stress_rise,
-                                                            radial_velocity, sector_mesh)
+    from forming_fenicsx.verification.verification import (
+        RADIAL, radial_stress_rise, radial_velocity, sector_mesh)
 
     forming_mesh = sector_mesh(cells, degree, comm)
     mesh = forming_mesh.mesh
     coordinates = CoordinateSystem(mesh, symmetry)
     u = dolfinx.fem.Function(function_space(mesh, "P", degree, (2,)))
     u.interpolate(lambda x: np.vstack(radial_velocity(symmetry, x)))
-    n, rho_c, beta, T_in = (ADIABATIC[k] for k in ("n", "heat_capacity", "heat_fraction",
-                                                    "inflow_temperature"))
+    n, rho_c, beta, T_in = (ADIABATIC[k] for k in
+                            ("n", "heat_capacity", "heat_fraction", "inflow_temperature"))
 
     def plastic_power(v, T):
         power = RADIAL["K"] * coordinates.equivalent_strain_rate(v) ** (n + 1)

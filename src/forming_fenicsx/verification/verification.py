@@ -147,8 +147,8 @@ def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> For
             gmsh.model.mesh.generate(2)
             gmsh.model.mesh.setOrder(degree)
         mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
-    roles = {role: ROLES[role] for role in ("gamma1_velocity", "gamma2_free", "gamma3_contact",
-                                           "gamma6_symmetry")}
+    roles = {role: ROLES[role]
+             for role in ("gamma1_velocity", "gamma2_free", "gamma3_contact", "gamma6_symmetry")}
     return FormingMesh(mesh, facet_tags, roles, [])
 
 

@@ -26,4 +26,3 @@ __all__ = ["ERROR_LEVELS", "MESH_KEYS", "QUANTITIES", "cheapest", "exact_value",
            "interior_minimum", "is_design_key", "load_study", "parse_quantities",
            "parse_vary", "positions", "references", "relative_error", "report", "run_folder",
            "run_study", "series", "solve_scene", "study_scenes", "value"]
-

@@ -86,7 +86,7 @@ def _cheapest_table(rows: list[dict[str, Any]], quantities: list[str], keys: lis
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]], quantities: list[str],
-               keys: list[str]) -> None:
+              keys: list[str]) -> None:
     """study.csv: settings, each quantity (with its reference, kind and relative error where the
     study has references for it), convergence and cost, and the run's folder when kept."""
     import csv
