@@ -9,7 +9,8 @@ import ufl
 from mpi4py import MPI
 
 from forming_fenicsx.core.compat import cell_geometry_nodes, original_cell_index
-from forming_fenicsx.mesh.geometry import build_mesh, graded_edge, write_msh
+from forming_fenicsx.mesh.geometry import build_mesh, write_msh
+from forming_fenicsx.mesh.grading import graded_edge
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.verification.verification import sector_mesh
 

@@ -17,6 +17,8 @@ from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.relative import check_positive
 from forming_fenicsx.physics.coordinates import SYMMETRIES
 
+SECTIONS = ("rectangle", "round")  # of a 3D product (geometry.section)
+
 
 class _Strip:
     """What every strip geometry (full thicknesses entry_thickness > exit_thickness) shares.
@@ -40,44 +42,87 @@ class _Strip:
     length: float | None
     mesh_file: str | None
     symmetry: str
+    section: str | None
+    entry_height: float | None
+    exit_height: float | None
+    entry_width: float | None
+    exit_width: float | None
 
     @property
     def axisymmetric(self) -> bool:
         return self.symmetry == "axisymmetric"
 
     @property
+    def three_dimensional(self) -> bool:
+        return self.symmetry == "3d"
+
+    @property
+    def round(self) -> bool:
+        """A round product: axisymmetric, or the 3D quarter of one (section = "round")."""
+        return self.axisymmetric or self.section == "round"
+
+    @property
     def whole_forces(self) -> bool:
-        """Whether the reported forces are forces (a round product's, or a strip's of the given
-        ``width``) rather than forces per unit width of a strip."""
-        return self.axisymmetric or self.width is not None
+        """Whether the reported forces are forces (a round product's, a 3D bar's, or a strip's of
+        the given ``width``) rather than forces per unit width of a strip."""
+        return self.axisymmetric or self.three_dimensional or self.width is not None
 
     def _diameters(self) -> None:
-        """A round product's diameters are the half model's full thicknesses: entry_diameter and
-        exit_diameter with symmetry = "axisymmetric", entry_thickness and exit_thickness for a
-        strip."""
+        """The model's full thicknesses from the sizes its product is given by: entry_thickness
+        and exit_thickness for a strip, entry_diameter and exit_diameter for a round product
+        (axisymmetric, or 3D with section = "round"), entry_height and exit_height (with
+        entry_width and exit_width) for a 3D bar of rectangular section; the other sizes are
+        refused."""
         if self.symmetry not in SYMMETRIES:
             raise SceneError("geometry.symmetry",
                              f"must be one of {', '.join(SYMMETRIES)}; got {self.symmetry!r}")
+        self._section()
+        given = {"strip": "thickness", "round": "diameter", "rectangle": "height"}[self.shape]
         for end in ("entry", "exit"):
-            thickness, diameter = f"{end}_thickness", f"{end}_diameter"
-            if not self.axisymmetric and getattr(self, diameter) is not None:
-                raise SceneError(f"geometry.{diameter}", "names a round product: it needs "
-                                 'geometry.symmetry = "axisymmetric" (a plane-strain strip has '
-                                 f"geometry.{thickness})")
-            if self.axisymmetric and getattr(self, thickness) is not None:
-                raise SceneError(f"geometry.{thickness}", "names a strip; a round product "
-                                 f'(symmetry = "axisymmetric") has geometry.{diameter}')
-            if self.axisymmetric:
-                setattr(self, thickness, getattr(self, diameter))
+            for size in ("thickness", "diameter", "height", "width"):
+                if size == given or (size == "width" and self.shape == "rectangle"):
+                    continue
+                if getattr(self, f"{end}_{size}") is not None:
+                    raise SceneError(f"geometry.{end}_{size}", f"does not describe a {self.shape} "
+                                     f"(symmetry = {self.symmetry!r}); it has geometry.{end}_"
+                                     f"{given}" + (" and _width" if self.shape == "rectangle"
+                                                   else ""))
+            if given != "thickness":
+                setattr(self, f"{end}_thickness", getattr(self, f"{end}_{given}"))
+
+    def _section(self) -> None:
+        """geometry.section: a 3D product's cross-section, "rectangle" (the default) or "round";
+        2D models take their shape from the symmetry."""
+        if not self.three_dimensional:
+            if self.section is not None:
+                raise SceneError("geometry.section", 'applies to symmetry = "3d" only')
+            return
+        if self.section is None:
+            self.section = "rectangle"
+        if self.section not in SECTIONS:
+            raise SceneError("geometry.section",
+                             f"must be one of {', '.join(SECTIONS)}; got {self.section!r}")
+
+    @property
+    def shape(self) -> str:
+        """What the sizes describe: a "strip", a "round" product or a "rectangle" (3D bar)."""
+        if self.three_dimensional:
+            return self.section or "rectangle"
+        return "round" if self.axisymmetric else "strip"
 
     @property
     def thinnest(self) -> float:
-        """Half-thickness (radius) of the thinnest section (the half model's exit)."""
+        """Half-thickness (radius) of the thinnest section (the half model's exit; a 3D bar's
+        smaller half-size there)."""
+        if self.shape == "rectangle":
+            return 0.5 * min(self.exit_thickness, self.exit_width)
         return 0.5 * self.exit_thickness
 
     def _record_diameters(self) -> None:
-        if self.axisymmetric:
+        if self.shape == "round":
             self.entry_diameter, self.exit_diameter = self.entry_thickness, self.exit_thickness
+        elif self.shape == "rectangle":
+            self.entry_height, self.exit_height = self.entry_thickness, self.exit_thickness
 
     def resolve(self) -> None:
         """Fill in the lengths left out: from the mesh file, or the paper's geometry scaled."""
@@ -93,17 +138,24 @@ class _Strip:
         paper = self.PAPER
         factor = (1.0 if self.entry_thickness is None
                   else self.entry_thickness / paper["entry_thickness"])
+        if self.three_dimensional and self.die_entry is None and hasattr(self, "die_entry"):
+            # a 3D model's stock ahead of the die: one entry size (the paper's 2D strips model
+            # 2 to 4 of them)
+            self.die_entry = self.entry_thickness
         for key, value in paper.items():
             if getattr(self, key) is None and key != "length":
                 setattr(self, key, value if key == "die_angle" else value * factor)
         self.check_die()
+        if self.length is None and self.three_dimensional:
+            # 1.5 exit sizes of product after the die, where the flow is rigid again
+            self.length = self.die_end + 1.5 * self.exit_thickness
         if self.length is None:  # the paper's length after the die, scaled: the die always fits
             self.length = paper["length"] * factor + (self.die_end - self._paper_die_end() * factor)
         self._record_diameters()
 
     @property
     def thickness_name(self) -> str:
-        return "diameter" if self.axisymmetric else "thickness"
+        return {"strip": "thickness", "round": "diameter", "rectangle": "height"}[self.shape]
 
     def _from_mesh(self) -> None:
         path = Path(self.mesh_file)
@@ -126,6 +178,12 @@ class _Strip:
     def check_die(self) -> None:
         """The die's own data (not with a mesh file)."""
 
+    def check_3d(self) -> None:
+        """What a 3D model supports: the built-in quarter models of a bar drawn or extruded
+        through a straight converging die with a land (die = "conical")."""
+        raise SceneError("geometry.die", "a 3D bar is drawn or extruded through a converging "
+                         'die (die = "conical"); the square die is a 2D model')
+
     def _die_file(self) -> None:
         """Read the die's own file, if it has one."""
 
@@ -136,14 +194,24 @@ class _Strip:
         for key in ("length", "entry_thickness", "exit_thickness"):
             check_positive(f"geometry.{key.replace('thickness', name)}", getattr(self, key))
         if self.width is not None:
-            if self.axisymmetric:
+            if self.symmetry != "plane_strain":
                 raise SceneError("geometry.width", "applies to a plane-strain strip only: a round "
-                                 "product's forces are the whole body's; leave it out")
+                                 "product's and a 3D bar's forces are the whole body's; leave it "
+                                 "out")
             check_positive("geometry.width", self.width)
+        if self.shape == "rectangle":
+            check_positive("geometry.entry_width", self.entry_width)
+            check_positive("geometry.exit_width", self.exit_width)
+            if self.exit_width > self.entry_width:
+                raise SceneError("geometry.exit_width", f"must be <= geometry.entry_width "
+                                 f"({self.entry_width}): the die may not widen; got "
+                                 f"{self.exit_width}")
         if self.exit_thickness >= self.entry_thickness:
             raise SceneError(f"geometry.exit_{name}", f"must be < geometry.entry_{name} "
                              f"({self.entry_thickness}): the die must reduce; got "
                              f"{self.exit_thickness}")
+        if self.three_dimensional:
+            self.check_3d()
         if self.mesh_file is None:
             self.check_die()
             if self.die_end >= self.length:
@@ -171,6 +239,11 @@ class ExtrusionGeometry(_Strip):
     exit_diameter: float | None = None
     die: str = "square"
     width: float | None = None  # of a strip: its forces in force units (else per unit width)
+    section: str | None = None
+    entry_height: float | None = None
+    exit_height: float | None = None
+    entry_width: float | None = None
+    exit_width: float | None = None
 
     @property
     def die_end(self) -> float:
@@ -216,6 +289,11 @@ class _ProfiledDie(_Strip):
     die_profile_file: str | None = None
     die: str = "conical"
     width: float | None = None  # of a strip: its forces in force units (else per unit width)
+    section: str | None = None
+    entry_height: float | None = None
+    exit_height: float | None = None
+    entry_width: float | None = None
+    exit_width: float | None = None
 
     def _die_file(self) -> None:
         """With die_profile_file: the thicknesses (when left out), die_entry and the recorded
@@ -280,6 +358,23 @@ class _ProfiledDie(_Strip):
         if profile.start[0] <= 0:
             raise SceneError("geometry.die_entry", f"the die begins at x = {profile.start[0]:.4g}: "
                              "it must begin after the entry face x = 0 (raise die_entry)")
+
+    def check_3d(self) -> None:
+        """A 3D die is straight faces and a land: the faces' profile keys that shape a 2D die
+        (entry radius, second angle, a CSV profile) and a mesh file are refused for now."""
+        for key, unset in (("mesh_file", None), ("die_profile_file", None), ("second_angle", None),
+                           ("entry_radius", 0.0)):
+            if getattr(self, key) not in (None, unset):
+                raise SceneError(f"geometry.{key}", 'is not available with symmetry = "3d" yet: '
+                                 "the 3D die has straight faces (geometry.die_angle) and a land")
+
+    @property
+    def width_angle(self) -> float:
+        """A 3D rectangular die's semi-angle (degrees) of the faces that reduce the width: they
+        converge over the same cone length as the height faces (die_angle); 0 where the width
+        does not change."""
+        return math.degrees(math.atan2(0.5 * (self.entry_width - self.exit_width),
+                                       self.cone_length))
 
     def profile(self) -> DieProfile:
         """The die wall (die_profile.py)."""

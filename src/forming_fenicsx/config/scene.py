@@ -35,6 +35,9 @@ from forming_fenicsx.physics.flow_laws import FlowLaw
 # The default mesh size over the exit half-thickness: about 5 elements across it (Example 1's 0.5),
 # 15 for drawing (Example 2's 0.05)
 MESH_SIZE_RELATIVE = {"extrusion": 0.2, "drawing": 1 / 15}
+# a 3D model's default: 4 elements across its thinnest half-size (its unknowns grow with the cube
+# of the refinement; docs/three_d.md measures the mesh error)
+MESH_SIZE_RELATIVE_3D = 0.25
 
 
 @dataclass
@@ -81,7 +84,9 @@ class Scene:
                              "number > 0")
         self.penalty.resolve(scales)
         self.friction.resolve(scales)
-        self.discretisation.resolve(self.geometry.thinnest, MESH_SIZE_RELATIVE[self.process.kind])
+        relative = (MESH_SIZE_RELATIVE_3D if self.geometry.three_dimensional
+                    else MESH_SIZE_RELATIVE[self.process.kind])
+        self.discretisation.resolve(self.geometry.thinnest, relative)
         if self.friction.mollification_length is None:  # about one element, recorded as used
             self.friction.mollification_length = self.discretisation.mesh_size
         if self.thermal is not None:
@@ -108,6 +113,10 @@ class Scene:
             raise SceneError("solver.method", "newton differentiates G at the integration points: "
                              'it needs discretisation.averaging = "quadrature"; got '
                              f"{self.discretisation.averaging!r}")
+        if self.thermal is not None and self.geometry.three_dimensional:
+            raise SceneError("thermal", 'heat transfer is not available with symmetry = "3d" yet '
+                             "(a 3D run solves the flow and the strain); leave [thermal] out or "
+                             "model the product in 2D")
         coupled = self.material.hardens or (self.material.heats and self.thermal is not None)
         if coupled and self.discretisation.averaging != "quadrature":
             raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "

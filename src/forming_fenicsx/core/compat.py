@@ -48,8 +48,9 @@ def function_space(mesh, family: str, degree: int, shape: tuple[int, ...] = ()):
     """A Lagrange ("P") or discontinuous Lagrange ("DP") space, scalar or vector valued."""
     if LEGACY:
         legacy_family = {"P": "CG", "DP": "DG"}[family]
-        if family == "DP" and mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral:
-            legacy_family = "DQ"  # what UFL 2022 makes of "DG" on quadrilaterals, with a warning
+        if family == "DP" and mesh.topology.cell_type in (dolfinx.mesh.CellType.quadrilateral,
+                                                          dolfinx.mesh.CellType.hexahedron):
+            legacy_family = "DQ"  # what UFL 2022 makes of "DG" on quads and hexes, with a warning
         if shape:
             return dolfinx.fem.VectorFunctionSpace(mesh, (legacy_family, degree), dim=shape[0])
         return dolfinx.fem.FunctionSpace(mesh, (legacy_family, degree))
@@ -106,9 +107,7 @@ def quadrature_points(mesh, degree: int) -> np.ndarray:
     """Reference Gauss points of the default scheme of that degree on the mesh's cells."""
     import basix
 
-    cell = (basix.CellType.quadrilateral
-            if mesh.topology.cell_type == dolfinx.mesh.CellType.quadrilateral
-            else basix.CellType.triangle)
+    cell = getattr(basix.CellType, mesh.topology.cell_type.name)
     return basix.make_quadrature(cell, degree)[0]
 
 

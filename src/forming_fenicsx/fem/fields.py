@@ -26,7 +26,7 @@ class FlowFields:
             self.pressure = dolfinx.fem.Function(pressure_space, name="pressure")
             self.u = dolfinx.fem.Function(self.V, name="velocity")
         else:
-            self.V = self.system_space = function_space(mesh, "P", degree, (2,))
+            self.V = self.system_space = function_space(mesh, "P", degree, (mesh.geometry.dim,))
             self.u = self.solution = dolfinx.fem.Function(self.V, name="velocity")
         velocity = self.system_space.sub(0) if mixed else self.V
         self.bcs = [dolfinx.fem.dirichletbc(PETSc.ScalarType(c.value),

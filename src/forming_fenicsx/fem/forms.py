@@ -86,7 +86,8 @@ class FlowProblem:
         self.constraints = forming_mesh.constraints
         self.comm = mesh.comm
         disc = scene.discretisation
-        self.coordinates = CoordinateSystem(mesh, scene.geometry.symmetry)
+        planes = sum(role in self.roles for role in ("gamma6_symmetry", "gamma7_symmetry"))
+        self.coordinates = CoordinateSystem(mesh, scene.geometry.symmetry, planes)
         self.mixed = disc.formulation == "mixed"
         self.fields = FlowFields(mesh, self.facet_tags, self.constraints, disc.degree, self.mixed)
         self.V, self.system_space = self.fields.V, self.fields.system_space

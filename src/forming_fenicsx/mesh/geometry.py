@@ -19,6 +19,8 @@ from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.config.mesh_file import gmsh_session, open_msh
 from forming_fenicsx.core.roles import ROLES, WORKPIECE
 from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.mesh.bar3d import rectangular_bar, round_bar
+from forming_fenicsx.mesh.grading import graded_edge
 
 
 @dataclass(frozen=True)
@@ -39,18 +41,6 @@ class FormingMesh:
     facet_tags: object
     roles: dict[str, int]
     constraints: list[Constraint]
-
-
-def graded_edge(length: float, size: float, grading: float, toward_end: bool) -> tuple[int, float]:
-    """Number of elements and gmsh progression for an edge refined geometrically toward one end.
-
-    ``grading`` is the ratio of the largest to the smallest element on the edge (1 is uniform).
-    """
-    elements = max(1, math.ceil(length / size - 1e-9))
-    if elements == 1 or grading == 1.0:
-        return elements, 1.0
-    ratio = grading ** (1.0 / (elements - 1))
-    return elements, 1.0 / ratio if toward_end else ratio
 
 
 @dataclass
@@ -180,15 +170,19 @@ def _elements_along(segment, size: float) -> tuple[int, float]:
 
 
 def _builder(scene: Scene):
-    """Example 1's square die, or a profiled die (drawing, conical extrusion)."""
-    return _extrusion if getattr(scene.geometry, "die", "") == "square" else _profiled
+    """Example 1's square die, a profiled die (drawing, conical extrusion), or a 3D quarter bar
+    (rectangular or round section, mesh/bar3d.py)."""
+    g = scene.geometry
+    if g.three_dimensional:
+        return round_bar if g.shape == "round" else rectangular_bar
+    return _extrusion if getattr(g, "die", "") == "square" else _profiled
 
 
 def _generate(scene: Scene) -> None:
     gmsh.model.add(scene.process.kind)
     _builder(scene)(scene)
     gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.generate(3 if scene.geometry.three_dimensional else 2)
     gmsh.model.mesh.setOrder(scene.discretisation.degree)
 
 
@@ -230,18 +224,25 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
         outcome = comm.bcast(outcome, root=0)
         if isinstance(outcome, SceneError):
             raise outcome
+        dim = 3 if scene.geometry.three_dimensional else 2
         with _one_scotch_thread():
-            mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
+            mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=dim)
     if outcome is not None:  # the file's tags -> the roles' tags
         values = np.array([outcome[int(v)] for v in facet_tags.values], dtype=np.int32)
         facet_tags = meshtags(mesh, mesh.topology.dim - 1, facet_tags.indices, values)
     present = set(int(v) for v in facet_tags.values)
     present = set().union(*comm.allgather(present))
     roles = {name: tag for name, tag in ROLES.items() if tag in present}
-    # Gamma1 and Gamma6 are normal to x and y in both processes: u_x = u_N^0 and u_y = 0.
-    constraints = [Constraint("gamma1_velocity", 0, scene.process.velocity),
-                   Constraint("gamma6_symmetry", 1, 0.0)]
-    return FormingMesh(mesh, facet_tags, roles, constraints)
+    return FormingMesh(mesh, facet_tags, roles, constraints(scene.process.velocity, roles))
+
+
+def constraints(velocity: float, roles: dict[str, int]) -> list[Constraint]:
+    """Gamma1, Gamma6 and Gamma7 are normal to x, y and z in every process: u_x = u_N^0 (2.5),
+    u_y = 0 and u_z = 0 (2.8)."""
+    found = [Constraint("gamma1_velocity", 0, velocity), Constraint("gamma6_symmetry", 1, 0.0)]
+    if "gamma7_symmetry" in roles:
+        found.append(Constraint("gamma7_symmetry", 2, 0.0))
+    return found
 
 
 def write_msh(scene: Scene, path: str | Path) -> Path:

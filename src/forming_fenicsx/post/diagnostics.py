@@ -49,10 +49,13 @@ def discrete_divergence(problem: FlowProblem) -> float:
 
 
 def free_surface_crossing(problem: FlowProblem) -> float:
-    """Volume crossing the free strip surfaces (Gamma2, Gamma4 facets whose normal is mostly
-    along y), in or out, relative to the flux through Gamma1: zero for a steady state whose free
-    surfaces are streamlines, so it measures what the fixed-domain model (2.6) lets cross them."""
-    surface = ufl.conditional(ufl.gt(abs(problem.n[1]), 0.5), 1.0, 0.0)
+    """Volume crossing the free surfaces (Gamma2, Gamma4 facets whose normal is mostly across the
+    flow: its y (and z) part over 0.5), in or out, relative to the flux through Gamma1: zero for a
+    steady state whose free surfaces are streamlines, so it measures what the fixed-domain model
+    (2.6) lets cross them."""
+    n = problem.n
+    across = abs(n[1]) if problem.mesh.geometry.dim == 2 else ufl.sqrt(n[1] ** 2 + n[2] ** 2)
+    surface = ufl.conditional(ufl.gt(across, 0.5), 1.0, 0.0)
     out = sum(integrate(problem, abs(ufl.dot(problem.u, problem.n)) * surface
                         * problem.ds(ROLES[role]))
               for role in ("gamma2_free", "gamma4_free") if role in problem.roles)

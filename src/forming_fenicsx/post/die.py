@@ -7,6 +7,7 @@ import math
 import dolfinx.fem
 import numpy as np
 import ufl
+from mpi4py import MPI
 from ufl.core.expr import Expr
 
 from forming_fenicsx.core.compat import function_space
@@ -15,6 +16,7 @@ from forming_fenicsx.fem.projection import LumpedProjector
 from forming_fenicsx.mesh.geometry import die_coordinate
 from forming_fenicsx.physics import friction
 from forming_fenicsx.post.contact_zone import facet_integrals, zone_scalars
+from forming_fenicsx.post.integrals import integrate
 
 
 def in_contact(problem: FlowProblem) -> Expr:
@@ -90,6 +92,32 @@ def die_scalars(problem: FlowProblem) -> dict[str, float]:
             "contact_length": zone["contact_length"],
             "contact_end_x": problem.comm.bcast(end, root=0),
             "die_contact_fraction": zone["die_contact_fraction"]}
+
+
+def die_scalars_3d(problem: FlowProblem) -> dict[str, float]:
+    """A 3D die's q_av (the contact pressure over the part of the faces in contact from the die
+    entry to the land, area-weighted), the product's contact area (the model's times
+    CoordinateSystem.whole), the largest x in contact and the fraction of the die's area in
+    contact (quadrature points in contact: the straight faces do not make the contact flicker,
+    contact_zone.py)."""
+    g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
+    cone = ufl.conditional(ufl.And(ufl.ge(x[0], g.die_entry),
+                                   ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    touching, ds = in_contact(problem), problem.ds_contact
+    area = integrate(problem, touching * cone * ds)
+    force = integrate(problem, die_pressure(problem) * touching * cone * ds)
+    contact = integrate(problem, touching * ds)
+    space = function_space(problem.mesh, "P", 1)
+    pressure = LumpedProjector(die_pressure(problem), dolfinx.fem.Function(space),
+                               problem.full_degree, ds).project()
+    facets = problem.role_facets("gamma3_contact")
+    dofs = dolfinx.fem.locate_dofs_topological(space, problem.mesh.topology.dim - 1, facets)
+    pressed = dofs[pressure.x.array[dofs] > 0]
+    end = space.tabulate_dof_coordinates()[pressed, 0].max(initial=-math.inf)
+    return {"mean_die_pressure": force / area if area > 0 else 0.0,
+            "contact_area": contact * problem.coordinates.whole,
+            "contact_end_x": problem.comm.allreduce(float(end), op=MPI.MAX),
+            "die_contact_fraction": contact / integrate(problem, 1.0 * ds)}
 
 
 def die_contact_fraction(problem: FlowProblem) -> float:

@@ -42,19 +42,21 @@ def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
     return normal, integrate(problem, -traction[0] * ds)
 
 
-def die_separation_force(problem: FlowProblem) -> float:
+def die_separation_force(problem: FlowProblem, component: int = 1) -> float:
     """The force that pushes the die apart: the y-traction of the workpiece on the die (contact
     pressure p n_y plus the friction stress's y part) integrated over Gamma3 with the coordinate
     system's separation weight: per unit width on one die half in plane strain; for a round die,
-    the force across a diametral plane, 2 int y t_y ds."""
+    the force across a diametral plane, 2 int y t_y ds; on a 3D die's half y > 0 (component 2:
+    the z-traction, on its half z > 0: the force on the side dies)."""
     if not problem.has_contact:
         return 0.0
     n, c = problem.n, problem.coordinates
-    traction_y = problem.contact_pressure(problem.u) * n[1]
+    traction = problem.contact_pressure(problem.u) * n[component]
     if problem.has_friction:
-        traction_y -= friction.friction_traction(problem.friction_coefficient(), problem.u, n)[1]
+        traction -= friction.friction_traction(problem.friction_coefficient(), problem.u,
+                                               n)[component]
     plain = problem.ds.measure(ROLES["gamma3_contact"])
-    return integrate(problem, traction_y * c.separation_weight * plain)
+    return integrate(problem, traction * c.separation_weight * plain)
 
 
 def applied_force_x(problem: FlowProblem) -> float:
@@ -93,8 +95,9 @@ def whole_product(problem: FlowProblem, numbers: dict[str, Any]) -> dict[str, An
     factor = problem.coordinates.whole * width
     scaled = {key: value * factor if key in PRODUCT_FORCES else value
               for key, value in numbers.items()}
-    if "die_separation_force" in scaled:
-        scaled["die_separation_force"] *= width
+    for key in ("die_separation_force", "die_side_force"):
+        if key in scaled:
+            scaled[key] *= width
     if "energy_balance" in scaled:
         scaled["energy_balance"] = {key: value if key in BALANCE_RATIOS else value * factor
                                     for key, value in scaled["energy_balance"].items()}

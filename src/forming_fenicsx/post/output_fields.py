@@ -24,7 +24,7 @@ def nodal_velocity(problem: FlowProblem) -> dolfinx.fem.Function:
     degree = geometry_degree(problem.mesh)
     if problem.scene.discretisation.degree == degree:
         return problem.u
-    space = function_space(problem.mesh, "P", degree, (2,))
+    space = function_space(problem.mesh, "P", degree, (problem.mesh.geometry.dim,))
     velocity = dolfinx.fem.Function(space, name="velocity")
     velocity.interpolate(problem.u)
     return velocity

@@ -18,11 +18,21 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
     g = problem.scene.geometry
     if g.mesh_file is not None:
         return {}
-    ratio = g.exit_thickness / g.entry_thickness
-    reduction = 1 - (ratio**2 if g.axisymmetric else ratio)
+    reduction = 1 - area_ratio(g)
+    if g.shape == "rectangle":  # the indicator is a 2D or round product's
+        return {"reduction": reduction}
+    symmetry = "axisymmetric" if g.round else g.symmetry
     return {"reduction": reduction,
             "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle,
-                                                               g.symmetry)}
+                                                               symmetry)}
+
+
+def area_ratio(g) -> float:
+    """A1/A0: the exit section over the entry section (of thicknesses for a strip)."""
+    ratio = g.exit_thickness / g.entry_thickness
+    if g.shape == "rectangle":
+        return ratio * g.exit_width / g.entry_width
+    return ratio**2 if g.round else ratio
 
 
 def product_flow_stress(problem: FlowProblem) -> float:
@@ -46,8 +56,8 @@ def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
     g = problem.scene.geometry
     exit_strain, entry_strain = mean_strain_through(problem), mean_strain_through(problem, False)
     gained = exit_strain - entry_strain
-    ratio = g.entry_thickness / g.exit_thickness
-    ideal = 2 * math.log(ratio) if g.axisymmetric else 2 / math.sqrt(3) * math.log(ratio)
+    ideal = (2 / math.sqrt(3) * math.log(g.entry_thickness / g.exit_thickness)
+             if g.shape == "strip" else -math.log(area_ratio(g)))
     rate = problem.equivalent_strain_rate(problem.u)
     work = integrate(problem, problem.flow_stress(problem.u) * rate * problem.dx)
     return {"mean_entry_strain": entry_strain, "mean_exit_strain": exit_strain,

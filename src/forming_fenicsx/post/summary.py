@@ -9,13 +9,22 @@ from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergen
                                               dissipation_outside_window, divergence_l2,
                                               exit_zone_rate_ratio, free_surface_crossing,
                                               relative_divergence)
-from forming_fenicsx.post.die import die_contact_fraction, die_scalars
+from forming_fenicsx.post.die import die_contact_fraction, die_scalars, die_scalars_3d
 from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
 from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
                                           product_flow_stress)
 from forming_fenicsx.post.ram_face import mean_hydrostatic_pressure
+
+
+def exit_section(problem: FlowProblem) -> float:
+    """The area the drawing force acts on: the model's exit section (the half-thickness per unit
+    width, pi R^2, or a 3D model's part of the section, integrated over Gamma1)."""
+    c = problem.coordinates
+    if c.three_dimensional:
+        return integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
+    return c.section(problem.scene.geometry.thinnest)
 
 
 def scalars(problem: FlowProblem) -> dict[str, float]:
@@ -27,24 +36,27 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     """
     residual, force, die_normal, die_friction, external = force_balance(problem)
     divergence = divergence_l2(problem)
+    three_d = problem.coordinates.three_dimensional
+    die_numbers = die_scalars_3d if three_d else die_scalars
     if problem.scene.process.kind == "extrusion":
         height = integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
         process = {"ram_force": force, "ram_pressure": force / height,
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
         if problem.scene.geometry.die != "square":
-            process.update({**die_scalars(problem), **pass_shape(problem)})
+            process.update({**die_numbers(problem), **pass_shape(problem)})
     else:
-        stress = force / problem.coordinates.section(problem.scene.geometry.thinnest)
+        stress = force / exit_section(problem)
         strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
         process = {"drawing_force": force, "drawing_stress": stress,
                    "product_yield_ratio": stress / strength,
-                   **die_scalars(problem), **pass_shape(problem)}
+                   **die_numbers(problem), **pass_shape(problem)}
     return whole_product(problem, {
         **process,
         **hardening_scalars(problem),
         **thermal_scalars(problem, process),
         "die_force_x": die_normal + die_friction,
         "die_separation_force": die_separation_force(problem),
+        **({"die_side_force": die_separation_force(problem, 2)} if three_d else {}),
         "die_normal_force_x": die_normal,
         "die_friction_force_x": die_friction,
         "applied_force_x": external,
