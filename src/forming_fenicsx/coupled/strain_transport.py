@@ -95,8 +95,8 @@ class StrainField:
         inflow = ufl.conditional(ufl.gt(entering, 0.5 * ufl.sqrt(ufl.dot(v, v))), entering, 0.0)
         rate = coordinates.equivalent_strain_rate(v)
         if scheme == "supg":
-            # the cell size (CellDiameter: Q1 only)
-            h = ufl.sqrt(abs(ufl.JacobianDeterminant(mesh)))
+            # the cell size, the volume's dim-th root (CellDiameter: Q1 only)
+            h = cell_size(mesh)
             speed = ufl.sqrt(ufl.dot(v, v)) + 1e-300
             test = w + h / (2 * degree * speed) * ufl.dot(v, ufl.grad(w))
             jumps = 0
@@ -204,6 +204,12 @@ class StrainField:
 
     def destroy(self) -> None:
         self._system.destroy()
+
+
+def cell_size(mesh) -> ufl.core.expr.Expr:
+    """A cell's size for SUPG: |det J|^(1/d) of its map (d = 2 or 3), sqrt(|det J|) in 2D."""
+    volume = abs(ufl.JacobianDeterminant(mesh))
+    return ufl.sqrt(volume) if mesh.geometry.dim == 2 else volume ** (1.0 / 3.0)
 
 
 def inflow_strain(mesh, degree: int, profile: np.ndarray, half_size: float):
