@@ -17,21 +17,25 @@ from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.core.units import DIMENSIONS
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.io.die_faces import write_die_faces
 from forming_fenicsx.io.die_plot import write_die_plot
 from forming_fenicsx.io.figure import Heading
 from forming_fenicsx.io.maps import write_figures
+from forming_fenicsx.io.maps3d import write_maps_3d
 from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_profile,
                                        write_exit_profile, write_fields, write_history,
                                        write_summary)
 from forming_fenicsx.io.profile_plot import write_exit_profile_plot
+from forming_fenicsx.io.section_plot import write_section_plot
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.mesh.transfer import transfer
-from forming_fenicsx.post.die import die_profile
+from forming_fenicsx.post.die import die_profile, die_stresses
 from forming_fenicsx.post.exit_profiles import exit_profile, exit_strain_profile
 from forming_fenicsx.post.forces import force_balance
 from forming_fenicsx.post.output_fields import output_fields
 from forming_fenicsx.post.sanity import check_run
 from forming_fenicsx.post.summary import scalars
+from forming_fenicsx.post.views3d import die_faces, exit_section_values, symmetry_planes
 from forming_fenicsx.solvers.accuracy import solve_to_accuracy
 from forming_fenicsx.solvers.choice import solver_for
 from forming_fenicsx.solvers.records import SolveResult
@@ -183,29 +187,43 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
-    profile = die_profile(problem)
+    three_d = problem.coordinates.three_dimensional
+    stresses = die_stresses(problem)
+    profile = die_profile(problem, stresses)
     heading = Heading.of_run(title or scene.process.kind, scene, summary)
-    if scene.output.figures:
+    if scene.output.figures and three_d:
+        faces, planes = die_faces(problem, stresses), symmetry_planes(problem)
+        if comm.rank == 0:
+            write_die_faces(faces, list(stresses), out / "die.png", heading, scene)
+            write_maps_3d(planes, profile, out, heading, scene.units)
+    elif scene.output.figures:
         write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
     if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
         ideal = summary["mean_entry_strain"] + summary["ideal_strain"]
-        profiles.append(("exit_strain", "equivalent_strain", exit_strain_profile(problem),
-                         "equivalent strain", ("entry strain + ideal ln(A0/A1)", ideal)))
+        across = (exit_section_values(problem, problem.strain) if three_d
+                  else exit_strain_profile(problem))
+        profiles.append(("exit_strain", "equivalent_strain", across, "equivalent strain",
+                         ("entry strain + ideal ln(A0/A1)", ideal)))
     temperature = problem.field("temperature")
     if temperature is not None:  # [thermal]: the product's temperature profile
         profiles.append(("exit_temperature", "temperature",
                          exit_profile(problem, temperature.T), "temperature",
                          ("inflow temperature", scene.thermal.inflow_temperature)))
+    mirrored = tuple(role in problem.roles for role in ("gamma6_symmetry", "gamma7_symmetry"))
     for stem, key, across, label, reference in profiles:
-        if comm.rank == 0:
-            write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
-            if scene.output.figures:
-                write_exit_profile_plot(across, out / f"{stem}.png", heading, label,
-                                        DIMENSIONS.get(key, ""), scene.units, reference)
+        if comm.rank != 0:
+            continue
+        write_exit_profile(out / f"{stem}.csv", across, key, scene.units)
+        if scene.output.figures and three_d:
+            write_section_plot(across["samples"], out / f"{stem}.png", heading, label,
+                               DIMENSIONS.get(key, ""), scene.units, mirrored, reference)
+        elif scene.output.figures:
+            write_exit_profile_plot(across, out / f"{stem}.png", heading, label,
+                                    DIMENSIONS.get(key, ""), scene.units, reference)
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
-        if scene.output.figures:
+        if scene.output.figures and not three_d:
             write_die_plot(profile, out / "die.png", heading, scene)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)

@@ -162,8 +162,9 @@ class _Strip:
         if path.suffix != ".msh" or not path.is_file():
             raise SceneError("geometry.mesh_file",
                              f"must name an existing Gmsh .msh file; got {self.mesh_file!r}")
-        measured = mesh_dimensions(str(path))
-        for key in ("entry_thickness", "exit_thickness", "length"):
+        measured = mesh_dimensions(str(path), self.three_dimensional)
+        widths = ("entry_width", "exit_width") if self.shape == "rectangle" else ()
+        for key in ("entry_thickness", "exit_thickness", "length", *widths):
             given, value = getattr(self, key), getattr(measured, key)
             if given is not None and not math.isclose(given, value, rel_tol=1e-6):
                 raise SceneError(f"geometry.{key}", f"is {given} but the mesh file "
@@ -360,9 +361,9 @@ class _ProfiledDie(_Strip):
                              "it must begin after the entry face x = 0 (raise die_entry)")
 
     def check_3d(self) -> None:
-        """A 3D die is straight faces and a land: the faces' profile keys that shape a 2D die
-        (entry radius, second angle, a CSV profile) and a mesh file are refused for now."""
-        for key, unset in (("mesh_file", None), ("die_profile_file", None), ("second_angle", None),
+        """A 3D die is straight faces and a land (or a user's mesh): the faces' profile keys that
+        shape a 2D die (entry radius, second angle, a CSV profile) are refused for now."""
+        for key, unset in (("die_profile_file", None), ("second_angle", None),
                            ("entry_radius", 0.0)):
             if getattr(self, key) not in (None, unset):
                 raise SceneError(f"geometry.{key}", 'is not available with symmetry = "3d" yet: '

@@ -122,6 +122,12 @@ class Scene:
             raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "
                              'reads the strain or temperature at the integration points: it needs '
                              f'"quadrature"; got {self.discretisation.averaging!r}')
+        if self.geometry.three_dimensional and \
+                getattr(self.material, "initial_strain_file", None) is not None:
+            raise SceneError("material.initial_strain_file", "is a profile across a 2D entry "
+                             '(y from the axis); symmetry = "3d" cannot read one yet (nor a 3D '
+                             "run's exit_strain.csv): give the stock's strain as a uniform "
+                             "material.initial_strain, e.g. the previous pass's mean_exit_strain")
         if self.material.hardens and self.material.initial_strain_file is not None:
             key = "material.initial_strain_file"
             check_section(read_strain_profile(self.material.initial_strain_file, key),

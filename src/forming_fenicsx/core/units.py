@@ -44,7 +44,9 @@ DIMENSIONS = {
     "drawing_force": "force_per_width",
     "die_force_x": "force_per_width", "die_normal_force_x": "force_per_width",
     "die_friction_force_x": "force_per_width", "applied_force_x": "force_per_width",
-    "die_separation_force": "force_per_width",
+    "die_separation_force": "force_per_width", "die_side_force": "force_per_width",
+    "contact_area": "area", "entry_section_area": "area", "exit_section_area": "area",
+    "z": "length",
     "contact_length": "length", "contact_end_x": "length", "divergence_l2": "velocity",
     "s": "length", "x": "length", "y": "length", "contact_pressure": "stress",
     "averaged_normal_stress": "stress", "friction_stress": "stress", "velocity": "velocity",
@@ -142,7 +144,7 @@ class Units:
         return columns
 
     def label(self, dimension: str) -> str | None:
-        """The unit of a dimension (length, time, stress, force, velocity, strain_rate,
+        """The unit of a dimension (length, area, time, stress, force, velocity, strain_rate,
         force_per_width, temperature), or None when the labels it needs are not given."""
         length, time, stress, force = self.length, self.time, self.stress, self.force
         if force is None and stress is not None and length is not None:
@@ -152,6 +154,7 @@ class Units:
             "velocity": f"{length}/{time}" if length and time else None,
             "strain_rate": f"1/{time}" if time else None,
             "force_per_width": f"{force}/{length}" if force and length else None,
+            "area": f"{length}^2" if length else None,
             "temperature": "K",  # kelvin in every system ([thermal], thermal.py)
         }
         return composed.get(dimension)

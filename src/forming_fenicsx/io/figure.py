@@ -9,6 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from forming_fenicsx.config.scene import Scene
 
 FAILURE_COLOUR = "tab:red"
@@ -38,20 +40,29 @@ def not_converged(summary: dict[str, Any]) -> str | None:
 def run_settings(scene: Scene) -> str:
     """The run's main settings for a figure title, numbers to 4 significant digits, e.g.
     "drawing, strip 2 -> 1.6 mm, die 10 deg, mu = 0.08, Q2 h = 0.0533 mm"; a two-angle or CSV
-    die gives the angle of its chord (DieProfile.effective_angle)."""
+    die gives the angle of its chord (DieProfile.effective_angle); a 3D bar its height and width,
+    "3D bar 4 x 6 -> 3.2 x 5 mm, die 8 deg (width 10.06 deg)"."""
     g, f, d = scene.geometry, scene.friction, scene.discretisation
     length = scene.units.label("length")
     unit = f" {length}" if length else ""
-    shape = "round" if g.axisymmetric else "strip"
+    sizes = f"{g.entry_thickness:.4g} -> {g.exit_thickness:.4g}"
+    shape = "round" if g.round else "strip"
+    if g.three_dimensional:
+        shape = f"3D {'round' if g.round else 'bar'}"
+        if not g.round:
+            sizes = (f"{g.entry_thickness:.4g} x {g.entry_width:.4g} -> {g.exit_thickness:.4g} x "
+                     f"{g.exit_width:.4g}")
     if getattr(g, "die_angle", None) is None:
         die = f", {g.die} die"
     else:
         chord = g.die_profile_file is not None or g.second_angle is not None
-        die = f", die {g.semi_angle:.4g} deg{' (chord)' if chord else ''}"
+        width = g.three_dimensional and not g.round
+        die = (f", die {g.semi_angle:.4g} deg{' (chord)' if chord else ''}"
+               f"{f' (width {g.width_angle:.4g} deg)' if width else ''}")
     friction = f"m = {f.m:.4g}" if f.law == "factor" else f"mu = {f.mu:.4g}"
     mesh = f"mesh {Path(g.mesh_file).name}" if g.mesh_file else f"h = {d.mesh_size:.3g}{unit}"
-    return (f"{scene.process.kind}, {shape} {g.entry_thickness:.4g} -> {g.exit_thickness:.4g}"
-            f"{unit}{die}, {friction}, {d.element} {mesh}")
+    return (f"{scene.process.kind}, {shape} {sizes}{unit}{die}, {friction}, {d.element} "
+            f"{mesh}")
 
 
 @dataclass(frozen=True)
@@ -71,14 +82,42 @@ class Heading:
     def put(self, ax: Any, what: str) -> None:
         """Title the axes with the run and ``what`` they show; a failed run's title is red and led
         by its failure, and "NOT CONVERGED" is written across the axes."""
+        text, style = self._title(what)
+        ax.set_title(text, **style)
+        self.mark(ax)
+
+    def put_above(self, fig: Any, axes: list[Any], what: str) -> None:
+        """The title of ``put`` above a figure of several panels, "NOT CONVERGED" across each."""
+        text, style = self._title(what)
+        fig.suptitle(text, **style)
+        for ax in axes:
+            self.mark(ax)
+
+    def _title(self, what: str) -> tuple[str, dict[str, Any]]:
+        """The title's text and style: the run and its settings, ``what`` the figure shows, led by
+        the failure in red for a failed run."""
         lines = [f"{self.name}: {self.settings}", what]
         if self.failure is None:
-            ax.set_title("\n".join(lines), fontsize=9)
+            return "\n".join(lines), {"fontsize": 9}
+        return "\n".join([self.failure, *lines]), {"fontsize": 9, "color": FAILURE_COLOUR}
+
+    def mark(self, ax: Any) -> None:
+        """"NOT CONVERGED" across the axes of a run that did not converge (every panel of a
+        figure whose heading is above one of them); nothing for a converged run."""
+        if self.failure is None:
             return
-        ax.set_title("\n".join([self.failure, *lines]), fontsize=9, color=FAILURE_COLOUR)
         ax.text(0.5, 0.5, "NOT CONVERGED", transform=ax.transAxes, ha="center", va="center",
                 fontsize=24, fontweight="bold", color=FAILURE_COLOUR, alpha=0.3, rotation=12,
                 zorder=20)
+
+
+def colour_range(values: list[np.ndarray]) -> tuple[float, float]:
+    """The least and largest of the values, at least 1e-3 of their size apart (a constant field,
+    e.g. no friction stress before the first solve, gets a readable colour bar rather than one
+    1e-12 wide with an offset above it)."""
+    low = min(float(np.nanmin(v)) for v in values)
+    high = max(float(np.nanmax(v)) for v in values)
+    return low, max(high, low + 1e-3 * max(abs(low), abs(high), 1.0))
 
 
 def plain_ticks(ax: Any) -> None:

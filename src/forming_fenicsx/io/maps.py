@@ -20,6 +20,7 @@ from forming_fenicsx.fem.projection import cell_means
 from forming_fenicsx.io.die_plot import die_parts
 from forming_fenicsx.io.figure import Heading, plain_ticks, pyplot, save
 from forming_fenicsx.io.flow_lines import flow_lines
+from forming_fenicsx.post.facet_samples import coincident
 from forming_fenicsx.post.output_fields import nodal_velocity
 
 QUAD_OUTLINE = [0, 1, 3, 2]  # dolfinx quadrilateral vertices in tensor order -> polygon order
@@ -69,9 +70,7 @@ def _gather_nodes(function: dolfinx.fem.Function
     points = np.concatenate([p for p, _ in parts])  # (cells, nodes per cell, 2)
     found = np.concatenate([v for _, v in parts])
     local = SUB_TRIANGLES[points.shape[1]]
-    scale = max(np.ptp(points.reshape(-1, 2), axis=0).max(), 1e-300)
-    keys = np.round(points.reshape(-1, 2) / scale * 1e9).astype(np.int64)
-    _, first, index = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    first, index = coincident(points.reshape(-1, 2))
     triangles = (index.reshape(points.shape[:2])[:, local]).reshape(-1, 3)
     return points.reshape(-1, 2)[first], triangles, found.reshape(-1, found.shape[-1])[first]
 
@@ -110,28 +109,29 @@ def die_body(wall: np.ndarray, right: float, top: float) -> np.ndarray:
 @dataclass(frozen=True)
 class Frame:
     """The window every map of a run shows (process_window, at 1:1 up to HEADROOM times the entry
-    half-size) and the die drawn over it."""
+    half-size) and the die drawn over it; ``across`` names the coordinate shown upward (a 3D
+    run's plane y = 0 shows z)."""
 
     x: tuple[float, float]
     top: float
     wall: np.ndarray  # the die wall: Gamma3's nodes in order along the die, (N, 2)
     units: Units
+    across: str = "y"
 
     @classmethod
-    def of_run(cls, outlines: np.ndarray, rate: np.ndarray, profile: dict, units: Units) -> Frame:
-        wall = np.column_stack([profile["x"], profile["y"]])
+    def of_run(cls, outlines: np.ndarray, rate: np.ndarray, wall: np.ndarray, units: Units,
+               across: str = "y") -> Frame:
         return cls(process_window(outlines, rate, wall), HEADROOM * outlines[..., 1].max(), wall,
-                   units)
+                   units, across)
 
     def axes(self) -> tuple[Any, Any]:
         """A figure and its axes sized to the window."""
         width = self.x[1] - self.x[0]
         return pyplot().subplots(figsize=(10, 8.5 * self.top / width + 1.6))
 
-    def finish(self, fig: Any, ax: Any, path: Path, heading: Heading, what: str,
-               colour: tuple[Any, str] | None = None) -> Path:
-        """The die (hatched, over the workpiece) on the window at 1:1, labelled axes, a colour bar
-        as tall as the map (``colour``: the mapping and its label), the heading; saved."""
+    def draw(self, fig: Any, ax: Any, colour: tuple[Any, str] | None = None) -> None:
+        """The die (hatched, over the workpiece) on the window at 1:1, labelled axes and a colour
+        bar as tall as the map (``colour``: the mapping and its label)."""
         from matplotlib.patches import Polygon
         from mpl_toolkits.axes_grid1 import make_axes_locatable
 
@@ -142,13 +142,50 @@ class Frame:
         ax.set_ylim(0.0, self.top)
         ax.set_aspect("equal")
         ax.set_xlabel(self.units.labelled("x", "length"))
-        ax.set_ylabel(self.units.labelled("y", "length"))
+        ax.set_ylabel(self.units.labelled(self.across, "length"))
         plain_ticks(ax)
         if colour is not None:
             bar = make_axes_locatable(ax).append_axes("right", size="2%", pad=0.1)
             fig.colorbar(colour[0], cax=bar, label=colour[1])
+
+    def finish(self, fig: Any, ax: Any, path: Path, heading: Heading, what: str,
+               colour: tuple[Any, str] | None = None) -> Path:
+        """draw, the heading; saved."""
+        self.draw(fig, ax, colour)
         heading.put(ax, what)
         return save(fig, path)
+
+
+FLOW_LINES = ("flow lines (streamlines of the steady velocity) and time lines (a grid of markers "
+              "1 x 2 bands at the entry)")
+STRAIN_RATE = "equivalent strain rate (cell means, log scale)"
+
+
+def draw_flow_lines(ax: Any, outlines: np.ndarray,
+                    nodes: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+    """The cells' outlines in light grey, and the flow lines and time lines (flow_lines.py) of
+    the velocity on the triangulated nodes (points, triangles, values)."""
+    from matplotlib.collections import PolyCollection
+
+    ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.85",
+                                     linewidths=0.3))
+    lines, times = flow_lines(*nodes)
+    for line in lines:
+        ax.plot(line[:, 0], line[:, 1], color="tab:blue", linewidth=1.0)
+    for line in times:
+        ax.plot(line[:, 0], line[:, 1], color="0.3", linewidth=0.6)
+
+
+def rate_cells(outlines: np.ndarray, rate: np.ndarray, largest: float) -> Any:
+    """The cells coloured by their strain rate on a log scale from 1e-4 of ``largest`` (the
+    largest of every panel that shares the scale) up to it."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import LogNorm
+
+    floor = max(largest * 1e-4, 1e-12)
+    return PolyCollection(outlines, array=np.maximum(rate, floor), cmap=STRAIN_RATE_MAP,
+                          norm=LogNorm(vmin=floor, vmax=max(largest, 2 * floor)),
+                          edgecolors="face")
 
 
 def write_figures(problem: FlowProblem, directory: Path, heading: Heading,
@@ -162,34 +199,18 @@ def write_figures(problem: FlowProblem, directory: Path, heading: Heading,
     temperatures = _gather_nodes(field.T) if field is not None else None
     if cells is None:
         return []
-    from matplotlib.collections import PolyCollection
-    from matplotlib.colors import LogNorm
-
     outlines, rate = cells
     units = problem.scene.units
-    frame = Frame.of_run(outlines, rate, profile, units)
+    frame = Frame.of_run(outlines, rate, np.column_stack([profile["x"], profile["y"]]), units)
 
     fig, ax = frame.axes()
-    ax.add_collection(PolyCollection(outlines, facecolors="none", edgecolors="0.85",
-                                     linewidths=0.3))
-    lines, times = flow_lines(*nodes)
-    for line in lines:
-        ax.plot(line[:, 0], line[:, 1], color="tab:blue", linewidth=1.0)
-    for line in times:
-        ax.plot(line[:, 0], line[:, 1], color="0.3", linewidth=0.6)
-    paths = [frame.finish(fig, ax, directory / "velocity.png", heading,
-                          "flow lines (streamlines of the steady velocity) and time lines "
-                          "(a grid of markers 1 x 2 bands at the entry)")]
+    draw_flow_lines(ax, outlines, nodes)
+    paths = [frame.finish(fig, ax, directory / "velocity.png", heading, FLOW_LINES)]
 
     fig, ax = frame.axes()
-    largest = np.nanmax(rate, initial=0.0)
-    floor = max(largest * 1e-4, 1e-12)
-    cells = PolyCollection(outlines, array=np.maximum(rate, floor), cmap=STRAIN_RATE_MAP,
-                           norm=LogNorm(vmin=floor, vmax=max(largest, 2 * floor)),
-                           edgecolors="face")
+    cells = rate_cells(outlines, rate, np.nanmax(rate, initial=0.0))
     ax.add_collection(cells)
-    paths.append(frame.finish(fig, ax, directory / "strain_rate.png", heading,
-                              "equivalent strain rate (cell means, log scale)",
+    paths.append(frame.finish(fig, ax, directory / "strain_rate.png", heading, STRAIN_RATE,
                               (cells, units.labelled("equivalent strain rate", "strain_rate"))))
 
     if temperatures is not None:

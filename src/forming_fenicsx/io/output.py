@@ -86,7 +86,8 @@ def single_grid_xdmf(path: Path, name: str = "workpiece") -> None:
 
 def write_die_profile(path: Path, profile: dict, units: Units) -> None:
     """die.csv: a row per node of Gamma3, ordered along the die (s from where the workpiece meets
-    it); headers ``name [unit]`` when the scene names its units."""
+    it; in 3D x, y, z ordered by x and around the section, post/die.py: die_profile); headers
+    ``name [unit]`` when the scene names its units."""
     names = list(profile)
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
@@ -96,11 +97,13 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 
 
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
-    """exit_<quantity>.csv: y across the product and the quantity ``name`` (the ``values`` of
-    exit_profiles.exit_profile or exit_strain_profile), the headers with their units (the strain
-    profile is the next pass's material.initial_strain_file: strain_profile.py reads it; a
-    temperature in kelvin, and in units.temperature beside it when that is another unit)."""
-    columns = [(units.column("y"), profile["y"]), *units.columns(name, profile["values"])]
+    """exit_<quantity>.csv: y across the product (and z over a 3D product's exit section) and the
+    quantity ``name`` (the ``values`` of exit_profiles.exit_profile or exit_strain_profile, or
+    views3d.exit_section_values), the headers with their units (a 2D strain profile is the next
+    pass's material.initial_strain_file: strain_profile.py reads it; a temperature in kelvin, and
+    in units.temperature beside it when that is another unit)."""
+    columns = [(units.column(axis), profile[axis]) for axis in ("y", "z") if axis in profile]
+    columns += units.columns(name, profile["values"])
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow([header for header, _ in columns])
@@ -115,8 +118,9 @@ def save_velocity(path: Path, u) -> None:
     """
     space = u.function_space
     owned = space.dofmap.index_map.size_local
-    points = space.tabulate_dof_coordinates()[:owned, :2]
-    values = u.x.array.reshape(-1, 2)[:owned]
+    dim = space.mesh.geometry.dim
+    points = space.tabulate_dof_coordinates()[:owned, :dim]
+    values = u.x.array.reshape(-1, dim)[:owned]
     parts = space.mesh.comm.gather((points, values), root=0)
     if space.mesh.comm.rank == 0:
         np.savez(path, points=np.concatenate([p for p, _ in parts]),
@@ -132,7 +136,7 @@ def load_velocity(path: Path, u) -> None:
     comm = space.mesh.comm
     with np.load(path) as saved:
         points, velocity = saved["points"], saved["velocity"]
-    local = space.tabulate_dof_coordinates()[:, :2]
+    local = space.tabulate_dof_coordinates()[:, :space.mesh.geometry.dim]
     total = comm.allreduce(space.dofmap.index_map.size_local)
     if len(points) != total:
         raise ValueError(f"the restart velocity has {len(points)} nodes, this mesh {total}: "

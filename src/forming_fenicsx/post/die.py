@@ -1,5 +1,6 @@
-"""The die: the contact pressure on Gamma3 (the penalty's sigma_N of (3.4), or the stress's), its
-nodal profile along the die coordinate s, and the contact zone's scalars (contact_zone.py)."""
+"""The die: the contact pressure on Gamma3 (the penalty's sigma_N of (3.4), or the stress's), the
+stresses at its nodes (in 2D a profile along the die coordinate s, in 3D a table of x, y, z), and
+the contact zone's scalars (contact_zone.py)."""
 from __future__ import annotations
 
 import math
@@ -33,32 +34,47 @@ def die_pressure(problem: FlowProblem) -> Expr:
     return problem.contact_pressure(problem.u)
 
 
-def die_profile(problem: FlowProblem) -> dict[str, np.ndarray] | None:
-    """Nodal values along Gamma3 on rank 0 (None elsewhere), ordered by the die coordinate s:
-    contact pressure, averaged normal stress (when friction uses it) and friction stress
-    |sigma_T|."""
-    space = function_space(problem.mesh, "P", 1)
-    ds = problem.ds_contact
+def die_stresses(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
+    """The stresses on Gamma3 at its nodes (P1, lumped projections over Gamma3): contact
+    pressure, averaged normal stress (when friction uses it) and friction stress |sigma_T|."""
     sources = {"contact_pressure": die_pressure(problem)}
     if problem.normal_stress_average is not None:
         sources["averaged_normal_stress"] = problem.normal_stress_average.value
     if problem.has_friction:
         slip = friction.tangential(problem.u, problem.n)
         sources["friction_stress"] = problem.friction_coefficient() * ufl.sqrt(ufl.dot(slip, slip))
+    return {name: on_die_nodes(problem, expr, name) for name, expr in sources.items()}
+
+
+def on_die_nodes(problem: FlowProblem, expr: Expr, name: str = "f") -> dolfinx.fem.Function:
+    """A quantity on Gamma3 at the nodes of P1: its lumped projection over Gamma3 (zero at the
+    nodes elsewhere)."""
+    target = dolfinx.fem.Function(function_space(problem.mesh, "P", 1), name=name)
+    return LumpedProjector(expr, target, problem.full_degree, problem.ds_contact).project()
+
+
+def die_profile(problem: FlowProblem, stresses: dict[str, dolfinx.fem.Function] | None = None
+                ) -> dict[str, np.ndarray] | None:
+    """The nodes of Gamma3 with die_stresses there (``stresses`` when given), on rank 0 (None
+    elsewhere; collective): in 2D ordered by the die coordinate s (its first column); in 3D x,
+    y, z ordered by x, then around the section from the plane z = 0 to the plane y = 0
+    (descending atan2(y, z))."""
+    stresses = die_stresses(problem) if stresses is None else stresses
+    space = next(iter(stresses.values())).function_space
     owned = space.dofmap.index_map.size_local
     dofs = dolfinx.fem.locate_dofs_topological(space, problem.mesh.topology.dim - 1,
                                                problem.role_facets("gamma3_contact"))
     dofs = dofs[dofs < owned]
     points = space.tabulate_dof_coordinates()[dofs]
-    columns = {"x": points[:, 0], "y": points[:, 1]}
-    for name, expr in sources.items():
-        target = dolfinx.fem.Function(space)
-        columns[name] = LumpedProjector(expr, target, problem.full_degree,
-                                        ds).project().x.array[dofs]
+    columns = {axis: points[:, i] for i, axis in enumerate("xyz"[:problem.mesh.geometry.dim])}
+    columns.update({name: stress.x.array[dofs] for name, stress in stresses.items()})
     gathered = problem.comm.gather(columns, root=0)
     if problem.comm.rank != 0:
         return None
     profile = {key: np.concatenate([part[key] for part in gathered]) for key in columns}
+    if "z" in profile:
+        order = np.lexsort((-np.arctan2(profile["y"], profile["z"]), profile["x"]))
+        return {key: profile[key][order] for key in columns}
     profile["s"] = die_coordinate(problem.scene, profile["x"], profile["y"])
     order = np.argsort(profile["s"])
     return {key: profile[key][order] for key in ["s", *columns]}
@@ -96,20 +112,19 @@ def die_scalars(problem: FlowProblem) -> dict[str, float]:
 
 def die_scalars_3d(problem: FlowProblem) -> dict[str, float]:
     """A 3D die's q_av (the contact pressure over the part of the faces in contact from the die
-    entry to the land, area-weighted), the product's contact area (the model's times
-    CoordinateSystem.whole), the largest x in contact and the fraction of the die's area in
-    contact (quadrature points in contact: the straight faces do not make the contact flicker,
-    contact_zone.py)."""
+    entry to the land, area-weighted; over all of Gamma3 for a user's mesh), the product's contact
+    area (the model's times CoordinateSystem.whole), the largest x in contact and the fraction of
+    the die's area in contact (quadrature points in contact: the straight faces do not make the
+    contact flicker, contact_zone.py)."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
-    cone = ufl.conditional(ufl.And(ufl.ge(x[0], g.die_entry),
-                                   ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    cone = 1.0 if g.mesh_file else ufl.conditional(
+        ufl.And(ufl.ge(x[0], g.die_entry), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     touching, ds = in_contact(problem), problem.ds_contact
     area = integrate(problem, touching * cone * ds)
     force = integrate(problem, die_pressure(problem) * touching * cone * ds)
     contact = integrate(problem, touching * ds)
-    space = function_space(problem.mesh, "P", 1)
-    pressure = LumpedProjector(die_pressure(problem), dolfinx.fem.Function(space),
-                               problem.full_degree, ds).project()
+    pressure = on_die_nodes(problem, die_pressure(problem))
+    space = pressure.function_space
     facets = problem.role_facets("gamma3_contact")
     dofs = dolfinx.fem.locate_dofs_topological(space, problem.mesh.topology.dim - 1, facets)
     pressed = dofs[pressure.x.array[dofs] > 0]

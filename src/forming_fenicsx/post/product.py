@@ -1,9 +1,11 @@
-"""Scalars of the product: the pass's reduction and central-burst indicator, its mean strain (the
-redundant strain beside the ideal one) and, with a hardening law, its strains, redundant-work
-factor and flow stresses."""
+"""Scalars of the product: the pass's reduction and central-burst indicator, a 3D product's section
+areas, its mean strain (the redundant strain beside the ideal one) and, with a hardening law, its
+strains, redundant-work factor and flow stresses."""
 from __future__ import annotations
 
 import math
+
+import ufl
 
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.physics.closed_forms import central_burst_indicator
@@ -33,6 +35,22 @@ def area_ratio(g) -> float:
     if g.shape == "rectangle":
         return ratio * g.exit_width / g.entry_width
     return ratio**2 if g.round else ratio
+
+
+def section_areas(problem: FlowProblem) -> dict[str, float]:
+    """A 3D product's entry and exit section areas, the whole product's: the model's end faces
+    (the boundary at its smallest and largest x) integrated, times CoordinateSystem.whole."""
+    x = ufl.SpatialCoordinate(problem.mesh)
+    ends = problem.comm.allgather((problem.mesh.geometry.x[:, 0].min(),
+                                   problem.mesh.geometry.x[:, 0].max()))
+    low, high = min(e[0] for e in ends), max(e[1] for e in ends)
+    tolerance = 1e-9 * (high - low)
+    areas = {}
+    for key, inside in (("entry_section_area", ufl.lt(x[0], low + tolerance)),
+                        ("exit_section_area", ufl.gt(x[0], high - tolerance))):
+        areas[key] = problem.coordinates.whole * integrate(
+            problem, ufl.conditional(inside, 1.0, 0.0) * problem.ds)
+    return areas
 
 
 def product_flow_stress(problem: FlowProblem) -> float:

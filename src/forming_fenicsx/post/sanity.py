@@ -68,12 +68,13 @@ def _graded(check: str, value: float, levels: tuple[float, float], message: str
 
 
 def product_name(scene: Scene) -> str:
-    """What the process makes, named for its symmetry: a drawn wire or strip, an extruded rod or
-    strip."""
-    shape = "wire" if scene.geometry.axisymmetric else "strip"
-    if scene.process.kind == "extrusion":
-        shape = "rod" if scene.geometry.axisymmetric else "strip"
-    return f"{'drawn' if scene.process.kind == 'drawing' else 'extruded'} {shape}"
+    """What the process makes, named for its shape: a drawn wire or an extruded rod (round,
+    axisymmetric or the 3D quarter of one), a bar (3D, rectangular section), or a strip (plane
+    strain)."""
+    g, drawing = scene.geometry, scene.process.kind == "drawing"
+    shape = ("wire" if drawing else "rod") if g.round else "bar" if g.three_dimensional \
+        else "strip"
+    return f"{'drawn' if drawing else 'extruded'} {shape}"
 
 
 def die_penetration(summary: dict[str, Any], scene: Scene, converged: bool) -> Finding | None:
@@ -124,7 +125,7 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
 
 def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
     """The product must leave the die rigid. A drawn product's stress must stay below its yield
-    stress in tension (2k = 2 sigma0/sqrt3 in plane strain, sigma0 for a round bar): when it
+    stress in tension (2k = 2 sigma0/sqrt3 in plane strain, sigma0 for a round or 3D bar): when it
     reaches it the product yields after the die and the pass cannot be drawn (the ideal work
     reaches it at a reduction of 1 - 1/e = 63 %). A law in its linear (viscous) branch stretches
     the product under any load: then the cause is the rate window (``found``)."""
@@ -133,10 +134,12 @@ def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> 
     yields = math.isfinite(ratio) and ratio > EXIT_ZONE_RIGID
     window = next((f for f in found if f.check == "rate_window"), None)
     stress_ratio = summary.get("product_yield_ratio", math.nan) if drawing else math.nan
-    limit = "sigma0, a round bar" if scene.geometry.axisymmetric else "2k, a plane-strain strip"
+    limit = ("2k, a plane-strain strip" if scene.geometry.symmetry == "plane_strain" else
+             "sigma0, a round bar" if scene.geometry.round else "sigma0, a bar in tension")
     stress = (f"the drawing stress {summary['drawing_stress']:.4g} is {stress_ratio:.3f} times the "
               f"yield stress in tension of the {product} ({limit})") if drawing else ""
-    rigid = (f"its mean strain rate over the last exit thickness is {ratio:.3g} times the "
+    size = scene.geometry.thickness_name if scene.geometry.three_dimensional else "thickness"
+    rigid = (f"its mean strain rate over the last exit {size} is {ratio:.3g} times the "
              f"workpiece's mean, where a rigid product has below {EXIT_ZONE_RIGID:g}")
     if yields and window is not None:
         return [Finding("exit_zone", f"the {product} deforms after the die ({rigid}) because "

@@ -14,7 +14,7 @@ from forming_fenicsx.post.forces import die_separation_force, force_balance, who
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
 from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
-                                          product_flow_stress)
+                                          product_flow_stress, section_areas)
 from forming_fenicsx.post.ram_face import mean_hydrostatic_pressure
 
 
@@ -50,6 +50,8 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         process = {"drawing_force": force, "drawing_stress": stress,
                    "product_yield_ratio": stress / strength,
                    **die_numbers(problem), **pass_shape(problem)}
+    if three_d:
+        process.update(section_areas(problem))
     return whole_product(problem, {
         **process,
         **hardening_scalars(problem),
