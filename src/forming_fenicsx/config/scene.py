@@ -132,6 +132,10 @@ class Scene:
             key = "material.initial_strain_file"
             check_section(read_strain_profile(self.material.initial_strain_file, key),
                           self.geometry.entry_thickness / 2, key)
+        if self.solver.linear == "iterative" and self.discretisation.formulation != "mixed":
+            raise SceneError("solver.linear", '"iterative" solves the mixed formulation\'s saddle '
+                             'point (the penalty\'s 1/d makes multigrid fail): set '
+                             'discretisation.formulation = "mixed", or solver.linear = "direct"')
         if self.discretisation.formulation == "mixed" and self.discretisation.element != "Q2":
             raise SceneError("discretisation.formulation", "mixed uses Q2 velocity with "
                              'discontinuous P1 pressure: it needs discretisation.element = "Q2"; '

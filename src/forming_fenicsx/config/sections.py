@@ -171,12 +171,21 @@ class Discretisation:
         return int(self.element[1])
 
 
+# the direct solver's options (solver.petsc_options' default): MUMPS
+DIRECT_OPTIONS = {"ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps"}
+LINEAR_SOLVERS = ("auto", "direct", "iterative")
+
+
 @dataclass
 class Solver:
     """Nonlinear iteration: the secant-modulus methods direct (3.13) or modified (3.33), or Newton's
     method after ``secant_start`` direct iterates (newton.py, both formulations); all stopped by the
     rule of (4.4).
 
+    ``linear``: how the linear systems are solved: "direct" (MUMPS), "iterative" (the mixed
+    formulation only: FGMRES with a fieldsplit Schur preconditioner and algebraic multigrid,
+    fem/saddle_point.py; its relative residual follows the nonlinear iteration) or "auto" (iterative
+    for a 3D mixed problem of at least solvers/linear.ITERATIVE_FROM unknowns, else direct).
     ``dual_start``: Newton's dual stress at the switch from the secant iterates, as a fraction of
     tau(u); below 1 it keeps the first Newton step's stiffness along the flow direction at about
     (1 - dual_start) times the secant's instead of alpha times (docs/solvers.md).
@@ -199,8 +208,8 @@ class Solver:
     stall_window: int = 40
     reference_strain_rate: float | None = None
     force_tolerance: float = 0.0
-    petsc_options: dict[str, Any] = field(default_factory=lambda: {
-        "ksp_type": "preonly", "pc_factor_mat_solver_type": "mumps"})
+    linear: str = "auto"
+    petsc_options: dict[str, Any] = field(default_factory=lambda: dict(DIRECT_OPTIONS))
 
     def check(self) -> None:
         if self.method not in ("direct", "modified", "newton"):
@@ -229,6 +238,9 @@ class Solver:
             raise SceneError("solver.force_tolerance",
                              f"must lie in [0, 1) (0: off); got {self.force_tolerance}")
         check_positive("solver.reference_strain_rate", self.reference_strain_rate)
+        if self.linear not in LINEAR_SOLVERS:
+            raise SceneError("solver.linear", f"must be one of {', '.join(LINEAR_SOLVERS)}; "
+                             f"got {self.linear!r}")
         for key, value in self.petsc_options.items():
             if not isinstance(value, (str, int, float, bool)):
                 raise SceneError(f"solver.petsc_options.{key}",

@@ -1,8 +1,10 @@
 """The flow's linear systems: K(u_n, u_{0,m}) u_{n+1} = F of (4.4) and Newton's step, solved by a
 PETSc KSP under the options prefix ``flow_`` (MUMPS Cholesky for the penalty formulation, LU for the
-mixed one, by default; secant.py chooses), with an estimate of each solve's error."""
+mixed one, by default; secant.py chooses), or iteratively (the mixed formulation's augmented saddle
+point, fem/saddle_point.py), with an estimate of each solve's error."""
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from typing import Any
@@ -10,8 +12,35 @@ from typing import Any
 import dolfinx.fem
 from petsc4py import PETSc
 
+from forming_fenicsx.core.errors import LinearSolveError
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.fem.linear_problem import LinearProblem
+from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
+
+# the iterative solves' relative residual: KRYLOV_FACTOR times the last relative increment of the
+# nonlinear iteration, within [KRYLOV_FLOOR, KRYLOV_CEILING]: looser solves moved the converged
+# answer of a hardening bar by 1 % (docs/iterative_solver.md)
+KRYLOV_FACTOR = 1e-8
+KRYLOV_FLOOR = 1e-12
+KRYLOV_CEILING = 1e-10
+# solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively
+# (docs/iterative_solver.md)
+ITERATIVE_FROM = 200_000
+
+
+def iterative(problem: FlowProblem) -> bool:
+    """Whether the scene's solver.linear (auto: by dimension, formulation and size) is iterative."""
+    kind = problem.scene.solver.linear
+    if kind == "auto":
+        return (problem.mixed and problem.mesh.geometry.dim == 3
+                and problem.unknowns >= ITERATIVE_FROM)
+    return kind == "iterative"
+
+
+def saddle_point_of(problem: FlowProblem) -> AugmentedSaddlePoint:
+    """The iterative solver's augmentation of the problem's mixed system, weighted by its secant
+    coefficient."""
+    return AugmentedSaddlePoint(problem.system_space, problem.secant_coefficient(), problem.dx)
 
 
 class LinearSolver(LinearProblem):
@@ -24,14 +53,17 @@ class LinearSolver(LinearProblem):
     and one set of factors is held (Newton's operator after the secant start's matrix); its
     ``petsc_options`` and ``positive_definite`` are then those of that KSP and matrix, and the
     arguments are not read.
-    ``name``: the prefix of its PETSc options, which stay set until destroy."""
+    ``name``: the prefix of its PETSc options, which stay set until destroy.
+    ``saddle_point``: the augmentation and fieldsplit of the iterative solver (none: direct; with
+    ``matrix_of``, that one's)."""
 
     def __init__(self, problem: FlowProblem, petsc_options: dict[str, Any],
                  bilinear: dolfinx.fem.Form | None = None,
                  linear: Sequence[dolfinx.fem.Form] | None = None,
                  matrix_of: LinearSolver | None = None, positive_definite: bool = False,
-                 name: str = "flow"):
+                 name: str = "flow", saddle_point: AugmentedSaddlePoint | None = None):
         self.problem = problem
+        self.saddle_point = saddle_point if matrix_of is None else matrix_of.saddle_point
         self.positive_definite = (matrix_of.positive_definite if matrix_of is not None
                                   else positive_definite)
         if linear is None:
@@ -45,6 +77,8 @@ class LinearSolver(LinearProblem):
 
     def assemble_matrix(self) -> None:
         super().assemble_matrix()
+        if self.saddle_point is not None:
+            self.saddle_point.augment_matrix(self.A)
         if self.positive_definite:
             # MUMPS then factorises L L^T, without pivoting (read at the first factorisation)
             self.A.setOption(PETSc.Mat.Option.SPD, True)
@@ -57,8 +91,38 @@ class LinearSolver(LinearProblem):
         return self.u
 
     def solve_system(self, x: PETSc.Vec, b: PETSc.Vec | None = None) -> None:
-        super().solve_system(x, b)
+        """x = A^-1 b; iteratively, b is augmented first (in place: the system solved is the
+        augmented one, of the same solution) with the weight of the matrix as last assembled, and
+        the system scaled for the solve (saddle_point.py)."""
         self._x = x
+        if self.saddle_point is None:
+            super().solve_system(x, b)
+            return
+        b = self.b if b is None else b
+        self.saddle_point.augment_vector(b)
+        self.saddle_point.scale(self.A, b)
+        self.saddle_point.configure(self.ksp)
+        try:
+            super().solve_system(x, b)
+        except LinearSolveError:
+            raise LinearSolveError(
+                f"the iterative solver stopped after {self.ksp.getIterationNumber()} Krylov "
+                f"iterations (reason {self.ksp.getConvergedReason()}); solver.linear = \"direct\" "
+                "solves the same system by MUMPS") from None
+        finally:
+            self.saddle_point.unscale(self.A, b, x)
+
+    def follow(self, increment: float) -> None:
+        """The next iterative solve's relative residual from the nonlinear iteration's last
+        relative increment (KRYLOV_FACTOR)."""
+        if self.saddle_point is not None and math.isfinite(increment):
+            rtol = min(max(KRYLOV_FACTOR * increment, KRYLOV_FLOOR), KRYLOV_CEILING)
+            self.ksp.setTolerances(rtol=rtol)
+
+    @property
+    def krylov_iterations(self) -> int:
+        """The last solve's Krylov iterations (1 for a direct solve)."""
+        return self.ksp.getIterationNumber()
 
     def error_estimate(self) -> float:
         """Relative forward error of the last solve, ||A^-1 (b - A x)|| / ||x||: one step of
@@ -66,8 +130,10 @@ class LinearSolver(LinearProblem):
         of triangular solves, no new factorisation). A backward-stable LU leaves a residual of
         rounding size, so the estimate is about the condition number of K times the machine
         precision: it shows when a small penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear
-        systems ill-conditioned."""
+        systems ill-conditioned. Iteratively: NaN (the Krylov's residual is its rtol's)."""
         x = self._x
+        if self.saddle_point is not None:  # not estimated: the Krylov stops at its rtol
+            return math.nan
         start = time.perf_counter()
         self.A.mult(x, self._residual)
         self._residual.aypx(-1.0, self.b)
@@ -80,4 +146,6 @@ class LinearSolver(LinearProblem):
         """Free the PETSc objects and the options set under this solver's prefix."""
         for item in (self._residual, self._correction):
             item.destroy()
+        if self.saddle_point is not None and self._owner:
+            self.saddle_point.destroy()
         super().destroy()

@@ -53,14 +53,18 @@ def newton_friction_note(scene: Scene, tolerance: float, method: str) -> str:
 
 
 def linear_solve_failed(outer: int, inner: int, error: Exception) -> str:
+    hint = "" if "solver.linear" in str(error) else (
+        ". Try a larger penalty parameter (penalty.d, penalty.d_N) or friction.d_T, or MUMPS LU "
+        "(solver.petsc_options.pc_type = \"lu\")")
     return (f"linear solve failed at outer {outer}, inner {inner}: {error}; the results are the "
-            "previous iterate. Try a larger penalty parameter (penalty.d, penalty.d_N) or "
-            "friction.d_T, or MUMPS LU (solver.petsc_options.pc_type = \"lu\")")
+            f"previous iterate{hint}")
 
 
 def newton_solve_failed(inner: int, error: Exception) -> str:
+    hint = "" if "solver.linear" in str(error) else (
+        ". Try a secant method or larger penalty parameters")
     return (f"linear solve failed at Newton step {inner}: {error}; the results are the previous "
-            "iterate. Try a secant method or larger penalty parameters")
+            f"iterate{hint}")
 
 
 def stop_requested(stop: str, outer: int, inner: int) -> str:

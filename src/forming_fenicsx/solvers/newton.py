@@ -188,7 +188,9 @@ class NewtonSolver(SecantSolver):
             # a full dual step, then the cap
             set_at_quadrature_points(forms.dual, forms.dual_update)
         record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error,
-                                 residual, step, law_switches, contact_switches)
+                                 residual, step, law_switches, contact_switches,
+                                 self.newton.krylov_iterations)
+        self.newton.follow(increment)
         result.history.append(record)
         if problem.comm.rank == 0:
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, "

@@ -19,7 +19,9 @@ from forming_fenicsx.core.errors import LinearSolveError
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.fem.linear_problem import Timings
 from forming_fenicsx.solvers import messages
-from forming_fenicsx.solvers.linear import LinearSolver
+from forming_fenicsx.config.sections import DIRECT_OPTIONS
+from forming_fenicsx.fem.saddle_point import OPTIONS as ITERATIVE_OPTIONS
+from forming_fenicsx.solvers.linear import LinearSolver, iterative, saddle_point_of
 from forming_fenicsx.solvers.records import IterationRecord, SolveResult
 
 log = logging.getLogger(__package__)  # the solvers' one logger (app/cli.py sets its level)
@@ -64,10 +66,17 @@ class SecantSolver:
         self.stop = stop
         settings = problem.scene.solver
         self.settings = settings
-        options = {"pc_type": self.factorisation(problem), **settings.petsc_options,
-                   **(petsc_options or {})}
+        saddle_point = saddle_point_of(problem) if iterative(problem) else None
+        if saddle_point is None:
+            options = {"pc_type": self.factorisation(problem), **settings.petsc_options}
+        else:  # the direct solver's defaults left out
+            options = {**ITERATIVE_OPTIONS, **{key: value for key, value in
+                                               settings.petsc_options.items()
+                                               if DIRECT_OPTIONS.get(key) != value}}
+        options.update(petsc_options or {})
         self.linear = LinearSolver(problem, options, positive_definite=(
-            options["pc_type"] == "cholesky" and not problem.mixed))
+            options.get("pc_type") == "cholesky" and not problem.mixed),
+            saddle_point=saddle_point)
         self._previous = problem.u.copy()
         self._state_is_current = False
         self._difference = petsc_vec(problem.u).duplicate()
@@ -110,7 +119,9 @@ class SecantSolver:
         if not math.isfinite(increment):  # keep the last finite iterate for the results
             previous.copy(u)
             self.problem.u.x.scatter_forward()
-        record = IterationRecord(outer, inner, increment, time.perf_counter() - start, solve_error)
+        record = IterationRecord(outer, inner, increment, time.perf_counter() - start, solve_error,
+                                 krylov_iterations=self.linear.krylov_iterations)
+        self.linear.follow(increment)
         result.history.append(record)
         if self.problem.comm.rank == 0:
             log.info("outer %d inner %3d  ||du||/||u|| = %.3e  (%.1f s)", outer, inner, increment,

@@ -1,0 +1,196 @@
+"""The iterative solver of the mixed formulation's saddle point (solver.linear = "iterative"):
+
+    [A  B^T] [u]   [f]          A: the velocity block (secant b(w; u, v) of (3.5), or Newton's
+    [B   0 ] [p] = [g],         operator), B: -(q, div u), g: the Dirichlet data's lifting.
+
+solved as the augmented system (augmented Lagrangian, Benzi and Olshanskii 2006)
+
+    [A + gamma B^T D^-1 B   B^T] [u]   [f + gamma B^T D^-1 g]
+    [B                       0 ] [p] = [g                   ],
+
+whose solution is the same (B u = g), with D = diag(M_eta), M_eta = int (1/eta) p q the pressure
+mass weighted by the secant viscosity eta = G/3: the term stiffens the velocity block's volumetric
+modes (the deviatoric viscous form has none) and makes -(1 + gamma) D^-1 a Schur complement
+preconditioner. The system is solved scaled symmetrically, S K S y = S b, x = S y, with
+S = diag(A_ii^-1/2) on the velocities and ((1 + gamma)/D_ii)^1/2 on the pressures: the Krylov's
+residual then weighs every row alike (unscaled, the rows of the rigid zones, whose eta is up to the
+rate window's 1e6 times larger, decide it, and the pressure of the plastic zone is left far less
+accurate than the residual says). PETSc fieldsplit
+(Schur, upper factorisation) under the solver's options prefix: algebraic multigrid on the velocity
+block (GAMG with the rigid-body near-null space), the Schur preconditioner (-1 on the scaled
+pressures), FGMRES outside.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+# the augmentation's weight (docs/iterative_solver.md: 10 needed fewer Krylov iterations than 1)
+GAMMA = 10.0
+# the options under the KSP's prefix (a scene's solver.petsc_options override any)
+OPTIONS: dict[str, Any] = {
+    "ksp_type": "fgmres", "ksp_gmres_restart": 200, "ksp_max_it": 1000,
+    "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur",
+    "pc_fieldsplit_schur_fact_type": "upper", "pc_fieldsplit_schur_precondition": "user",
+    "fieldsplit_u_ksp_type": "preonly", "fieldsplit_u_pc_type": "gamg",
+    "fieldsplit_u_pc_gamg_threshold": 0.02,
+    "fieldsplit_p_ksp_type": "preonly", "fieldsplit_p_pc_type": "jacobi"}
+
+
+def owned_subspace(space: dolfinx.fem.FunctionSpace, index: int) -> tuple[np.ndarray, Any]:
+    """The global indices (in ``space``, sorted) of the owned dofs of sub-space ``index``, and that
+    sub-space collapsed with the map of its owned dofs into them."""
+    sub, parent = space.sub(index).collapse()
+    parent = np.asarray(parent)
+    owned = sub.dofmap.index_map.size_local * sub.dofmap.index_map_bs
+    offset = space.dofmap.index_map.local_range[0] * space.dofmap.index_map_bs
+    local = parent[:owned]
+    order = np.argsort(local)
+    return local[order] + offset, (sub, order)
+
+
+def rigid_body_modes(velocity: dolfinx.fem.FunctionSpace, order: np.ndarray) -> list[np.ndarray]:
+    """The rigid motions (translations and rotations: 3 in 2D, 6 in 3D) on the owned velocity dofs
+    in ``order``: multigrid's near-null space of the velocity block."""
+    dim = velocity.mesh.geometry.dim
+    owned = velocity.dofmap.index_map.size_local
+    points = velocity.tabulate_dof_coordinates()[:owned]
+    coordinates = np.repeat(points, dim, axis=0)[order]
+    component = np.tile(np.arange(dim), owned)[order]
+    rotations = [(0, 1)] if dim == 2 else [(0, 1), (1, 2), (2, 0)]
+    modes = []
+    for k in range(dim + len(rotations)):
+        values = np.zeros(len(order))
+        if k < dim:
+            values[component == k] = 1.0
+        else:
+            i, j = rotations[k - dim]
+            values[component == i] = -coordinates[component == i, j]
+            values[component == j] = coordinates[component == j, i]
+        modes.append(values)
+    return modes
+
+
+class AugmentedSaddlePoint:
+    """The augmentation and fieldsplit of one mixed system on ``space`` (velocity x pressure), the
+    pressure weight 1/eta = 3/G from the UFL coefficient ``secant`` (G of a(w; u, v))."""
+
+    def __init__(self, space: dolfinx.fem.FunctionSpace, secant, dx: ufl.Measure,
+                 gamma: float = GAMMA):
+        comm = space.mesh.comm
+        self.gamma = gamma
+        velocity_dofs, (velocity, order) = owned_subspace(space, 0)
+        pressure_dofs, _ = owned_subspace(space, 1)
+        self.velocity = PETSc.IS().createGeneral(velocity_dofs.astype(PETSc.IntType), comm=comm)
+        self.velocity.setBlockSize(space.mesh.geometry.dim)
+        self.pressure = PETSc.IS().createGeneral(pressure_dofs.astype(PETSc.IntType), comm=comm)
+        start, end = space.dofmap.index_map.local_range
+        bs = space.dofmap.index_map_bs
+        self.rows = PETSc.IS().createStride((end - start) * bs, start * bs, 1, comm=comm)
+        self._modes = rigid_body_modes(velocity, order)
+        self._mode_vectors = [PETSc.Vec().createMPI((len(order), PETSc.DECIDE), comm=comm)
+                              for _ in self._modes]
+        self.modes = PETSc.NullSpace().create(vectors=self._mode_vectors, comm=comm)
+        self.velocity.compose("nearnullspace", self.modes)
+        self._scale: PETSc.Vec | None = None  # S
+        p, q = ufl.TrialFunctions(space)[1], ufl.TestFunctions(space)[1]
+        self._weight = dolfinx.fem.form(3.0 / secant * p * q * dx)
+        self._weight_matrix = dolfinx.fem.petsc.create_matrix(self._weight)
+        self.schur: PETSc.Mat | None = None  # -D/(1 + gamma) on the pressure dofs
+        self._inverse: PETSc.Vec | None = None  # D^-1
+        self._B: PETSc.Mat | None = None  # the pressure rows of the last augmented matrix
+        self._configured = False
+
+    def augment_matrix(self, A: PETSc.Mat) -> None:
+        """A += gamma B^T D^-1 B (in A's sparsity: B couples the velocity dofs of one cell), with D
+        at the coefficients' current values."""
+        M = self._weight_matrix
+        M.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(M, self._weight)
+        M.assemble()
+        diagonal = M.createSubMatrix(self.pressure, self.pressure).getDiagonal()
+        if self._inverse is None:
+            self._inverse = diagonal.duplicate()
+        diagonal.copy(self._inverse)
+        self._inverse.reciprocal()
+        if self.schur is None:
+            self.schur = PETSc.Mat().createAIJ((diagonal.getSizes(), diagonal.getSizes()), nnz=1,
+                                               comm=diagonal.getComm())
+        diagonal.set(-1.0)  # -D/(1 + gamma) scaled by S^2
+        self.schur.setDiagonal(diagonal)
+        self.schur.assemble()
+        if self._B is not None:
+            self._B.destroy()
+        self._B = A.createSubMatrix(self.pressure, self.rows)
+        scaled = self._B.copy()
+        scaled.diagonalScale(L=self._inverse)
+        product = self._B.transposeMatMult(scaled)
+        A.axpy(self.gamma, product, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        for item in (scaled, product, diagonal):
+            item.destroy()
+
+    def augment_vector(self, b: PETSc.Vec) -> None:
+        """b += gamma B^T D^-1 g, g the pressure rows of b (after augment_matrix)."""
+        g = b.getSubVector(self.pressure)
+        weighted = g.copy()
+        b.restoreSubVector(self.pressure, g)
+        weighted.pointwiseMult(weighted, self._inverse)
+        extra = self._B.createVecRight()
+        self._B.multTranspose(weighted, extra)
+        b.axpy(self.gamma, extra)
+        for item in (weighted, extra):
+            item.destroy()
+
+    def scale(self, A: PETSc.Mat, b: PETSc.Vec) -> None:
+        """A <- S A S and b <- S b (after augment_matrix and augment_vector; unscale undoes it),
+        and the near-null space's modes in the scaled unknowns, S^-1 r, orthonormal."""
+        if self._scale is None:
+            self._scale = b.duplicate()
+        scale = self._scale
+        A.getDiagonal(scale)
+        velocity = scale.getSubVector(self.velocity)
+        velocity.sqrtabs()
+        velocity.reciprocal()
+        for vector, values in zip(self._mode_vectors, self._modes):
+            vector.array[:] = values / velocity.array
+        scale.restoreSubVector(self.velocity, velocity)
+        pressure = scale.getSubVector(self.pressure)
+        self._inverse.copy(pressure)
+        pressure.scale(1.0 + self.gamma)
+        pressure.sqrtabs()
+        scale.restoreSubVector(self.pressure, pressure)
+        for k, vector in enumerate(self._mode_vectors):  # Gram-Schmidt
+            for previous in self._mode_vectors[:k]:
+                vector.axpy(-vector.dot(previous), previous)
+            vector.normalize()
+        A.diagonalScale(scale, scale)
+        b.pointwiseMult(b, scale)
+
+    def unscale(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        """A <- S^-1 A S^-1, b <- S^-1 b, and the solution x = S y of the scaled system."""
+        x.pointwiseMult(x, self._scale)
+        b.pointwiseDivide(b, self._scale)
+        inverse = self._scale.copy()
+        inverse.reciprocal()
+        A.diagonalScale(inverse, inverse)
+        inverse.destroy()
+
+    def configure(self, ksp: PETSc.KSP) -> None:
+        """The fieldsplit's two fields and its Schur preconditioner, once (after augment_matrix)."""
+        if self._configured:
+            return
+        self._configured = True
+        pc = ksp.getPC()
+        pc.setFieldSplitIS(("u", self.velocity), ("p", self.pressure))
+        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)
+
+    def destroy(self) -> None:
+        for item in (self._weight_matrix, self.schur, self._inverse, self._B, self.modes,
+                     *self._mode_vectors, self._scale, self.velocity, self.pressure, self.rows):
+            if item is not None:
+                item.destroy()
