@@ -48,8 +48,7 @@ class StrainTangent:
         self._shell.setUp()
         self._ksp = PETSc.KSP().create(A.getComm())
         self._ksp.setOperators(self._shell)
-        # a Krylov solve inside (the iterative flow solver) is a preconditioner that varies
-        self._ksp.setType("gmres" if factors.getType() == "preonly" else "fgmres")
+        self._ksp.setType("gmres")
         self._ksp.setPCSide(PETSc.PC.Side.RIGHT)
         self._ksp.getPC().setType("python")
         self._ksp.getPC().setPythonContext(_Shell(factors.solve))

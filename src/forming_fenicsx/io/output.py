@@ -35,17 +35,19 @@ def write_summary(path: Path, summary: dict[str, Any]) -> None:
 
 def write_history(path: Path, history: list[IterationRecord]) -> None:
     """history.csv: a row per linear solve (residual norm, step length and switch counts for Newton
-    steps, else nan, 1 and -1)."""
+    steps, else nan, 1 and -1; an iterative solve's outer and velocity-block Krylov iterations,
+    else 1 and 0)."""
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(["outer", "inner", "relative_increment", "elapsed_s",
                          "solve_error_estimate", "residual_norm", "step_length", "law_switches",
-                         "contact_switches"])
+                         "contact_switches", "krylov_iterations", "velocity_iterations"])
         for record in history:
             writer.writerow([record.outer, record.inner, f"{record.increment:.6e}",
                              f"{record.elapsed:.4f}", f"{record.solve_error:.3e}",
                              f"{record.residual:.6e}", f"{record.step:.6g}",
-                             record.law_switches, record.contact_switches])
+                             record.law_switches, record.contact_switches,
+                             record.krylov_iterations, record.velocity_iterations])
 
 
 def write_fields(path: Path, mesh, fields) -> None:

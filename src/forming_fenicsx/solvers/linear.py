@@ -124,6 +124,11 @@ class LinearSolver(LinearProblem):
         """The last solve's Krylov iterations (1 for a direct solve)."""
         return self.ksp.getIterationNumber()
 
+    @property
+    def velocity_iterations(self) -> int:
+        """The velocity block's Krylov iterations of all iterative solves so far (0: direct)."""
+        return 0 if self.saddle_point is None else self.saddle_point.velocity_iterations
+
     def error_estimate(self) -> float:
         """Relative forward error of the last solve, ||A^-1 (b - A x)|| / ||x||: one step of
         iterative refinement with the factors already computed (a matrix-vector product and a pair

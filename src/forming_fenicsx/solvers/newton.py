@@ -81,9 +81,12 @@ class NewtonSolver(SecantSolver):
         self._active: np.ndarray | None = None
         # a coupled field's derivative in the step once the coupling has settled (the
         # transported strain's, strain_tangent.py)
+        # (not with the iterative solver: each GMRES iteration would be a whole Krylov solve; the
+        # coupling is then staggered, as before it settles)
         carried = [field for field in problem.frozen if field.tangent]
-        self.coupled_tangent = StrainTangent(problem, carried[0], self.forms.residual.ufl,
-                                             self.newton.A, self.newton.ksp) if carried else None
+        self.coupled_tangent = StrainTangent(
+            problem, carried[0], self.forms.residual.ufl, self.newton.A, self.newton.ksp) \
+            if carried and self.linear.saddle_point is None else None
 
     def destroy(self) -> None:
         self.newton.destroy()
@@ -157,6 +160,7 @@ class NewtonSolver(SecantSolver):
         residual = self.assemble_residual().norm()
         self.assemble_operator()
         law_switches, contact_switches = self.count_switches()
+        inner_before = self.newton.velocity_iterations
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
@@ -189,7 +193,8 @@ class NewtonSolver(SecantSolver):
             set_at_quadrature_points(forms.dual, forms.dual_update)
         record = IterationRecord(0, inner, increment, time.perf_counter() - start, solve_error,
                                  residual, step, law_switches, contact_switches,
-                                 self.newton.krylov_iterations)
+                                 self.newton.krylov_iterations,
+                                 self.newton.velocity_iterations - inner_before)
         self.newton.follow(increment)
         result.history.append(record)
         if problem.comm.rank == 0:

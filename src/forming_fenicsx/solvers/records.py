@@ -17,7 +17,8 @@ class IterationRecord:
     how many Gauss points changed the branch of the flow-stress law (constant secant or not, G' = 0
     or not) and how many die nodes changed the contact active set since the previous Newton
     operator (-1: none before, or no contact): the semismooth switches that keep Newton's
-    convergence from being quadratic; the Krylov iterations of an iterative solve (0: direct)."""
+    convergence from being quadratic; an iterative solve's (outer) Krylov iterations and the
+    velocity block's (inner) iterations in it (1 and 0 for a direct solve)."""
 
     outer: int
     inner: int
@@ -28,7 +29,8 @@ class IterationRecord:
     step: float = 1.0
     law_switches: int = -1
     contact_switches: int = -1
-    krylov_iterations: int = 0
+    krylov_iterations: int = 1
+    velocity_iterations: int = 0
 
 
 # why an iteration stops unconverged (SolveResult.cause)

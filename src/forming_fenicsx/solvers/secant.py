@@ -101,6 +101,7 @@ class SecantSolver:
         """
         u, previous = petsc_vec(self.problem.u), petsc_vec(self._previous)
         u.copy(previous)
+        inner_before = self.linear.velocity_iterations
         try:
             self.linear.solve()
         except LinearSolveError as error:
@@ -120,7 +121,9 @@ class SecantSolver:
             previous.copy(u)
             self.problem.u.x.scatter_forward()
         record = IterationRecord(outer, inner, increment, time.perf_counter() - start, solve_error,
-                                 krylov_iterations=self.linear.krylov_iterations)
+                                 krylov_iterations=self.linear.krylov_iterations,
+                                 velocity_iterations=(self.linear.velocity_iterations
+                                                      - inner_before))
         self.linear.follow(increment)
         result.history.append(record)
         if self.problem.comm.rank == 0:
