@@ -19,6 +19,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from forming_fenicsx.app.bench_scale import (DEFAULT_SCALE_SIZES, growth_exponents,
+                                             run_scale_case, scale_bench, scale_table)
 from forming_fenicsx.core.report import markdown_table
 
 DEMOS = Path(__file__).resolve().parents[3] / "demos"
@@ -45,6 +47,8 @@ METHODS = ("direct", "modified", "newton")
 
 def run_case(case: dict[str, Any]) -> dict[str, Any]:
     """Solve one case in this process (all ranks) and return its row (on every rank)."""
+    if case.get("scale"):
+        return run_scale_case(case)
     from mpi4py import MPI
 
     from forming_fenicsx.app.run import solve_scene
@@ -227,6 +231,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="the hardening scenes instead of the examples: each coupled and "
                              "with the flow stress frozen at its mean (the first --ranks and "
                              "--sizes; h 0.06 mm)")
+    parser.add_argument("--scale", action="store_true",
+                        help="a 3D bar on --sizes (default 1.0 0.7 0.5 mm) and --ranks, solved "
+                             "by each --linear solver: time, memory and Krylov iterations "
+                             "against the unknowns")
+    parser.add_argument("--linear", nargs="+", default=["direct", "iterative"],
+                        choices=["direct", "iterative"], help="the linear solvers of --scale")
     parser.add_argument("--out", default="results/bench.json")
     args = parser.parse_args(argv)
     if args.repeat < 1:
@@ -242,6 +252,10 @@ def main(argv: list[str] | None = None) -> int:
         print("forming bench: run it without mpirun; --ranks sets the ranks of each case",
               file=sys.stderr)
         return 2
+    if args.scale:
+        rows = scale_bench(args.sizes or DEFAULT_SCALE_SIZES, args.ranks, args.linear, _launch)
+        print(scale_table(rows))
+        return _write(Path(args.out), rows + [{"growth": growth_exponents(rows)}])
     if args.hardening:
         rows = hardening_bench(args.ranks[0], (args.sizes or [0.06])[0], args.repeat)
         print(hardening_table(rows))
