@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import gmsh
@@ -178,12 +180,24 @@ def _builder(scene: Scene):
     return _extrusion if getattr(g, "die", "") == "square" else _profiled
 
 
-def _generate(scene: Scene) -> None:
+def add_model(scene: Scene) -> None:
+    """The scene's gmsh model in the current session: its blocks and physical groups, unmeshed
+    (mesh/slab.py extrudes a strip's)."""
     gmsh.model.add(scene.process.kind)
     _builder(scene)(scene)
+
+
+def mesh_model(dim: int, degree: int) -> None:
+    """Mesh the current gmsh model in ``dim`` dimensions with complete Lagrange cells of the
+    element's degree (isoparametric: 9-node quadrilaterals, 27-node hexahedra for Q2)."""
     gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
-    gmsh.model.mesh.generate(3 if scene.geometry.three_dimensional else 2)
-    gmsh.model.mesh.setOrder(scene.discretisation.degree)
+    gmsh.model.mesh.generate(dim)
+    gmsh.model.mesh.setOrder(degree)
+
+
+def _generate(scene: Scene) -> None:
+    add_model(scene)
+    mesh_model(3 if scene.geometry.three_dimensional else 2, scene.discretisation.degree)
 
 
 @contextmanager
@@ -202,11 +216,13 @@ def _one_scotch_thread():
             os.environ["SCOTCH_PTHREAD_NUMBER"] = previous
 
 
-def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
+def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
+               generate: Callable[[], None] | None = None) -> FormingMesh:
     """Mesh the scene's workpiece on rank 0 and distribute it (isoparametric: geometry order =
     element), or read the scene's own .msh file (geometry.mesh_file, checked when the scene was
-    read). The partition repeats from run to run (_one_scotch_thread); its ghosts are
-    compat.GHOST_MODE's."""
+    read). ``generate`` meshes another gmsh model of the scene's workpiece on rank 0 instead of
+    its own (mesh/slab.py: a strip's model extruded). The partition repeats from run to run
+    (_one_scotch_thread); its ghosts are compat.GHOST_MODE's."""
     from dolfinx.mesh import meshtags
 
     from forming_fenicsx.core.compat import mesh_from_gmsh
@@ -218,7 +234,7 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
             try:
                 outcome = open_msh(mesh_file) if mesh_file else None
                 if not mesh_file:
-                    _generate(scene)
+                    (generate or partial(_generate, scene))()
             except SceneError as error:
                 outcome = error
         outcome = comm.bcast(outcome, root=0)
