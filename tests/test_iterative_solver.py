@@ -5,9 +5,11 @@ from __future__ import annotations
 import pytest
 from mpi4py import MPI
 
+from forming_fenicsx.app.bench_scale import growth_exponents, run_scale_case, scale_table
 from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.solvers.linear import ITERATIVE_FROM
 
 BAR = {"process": {"kind": "drawing", "velocity": 1.0},
        "geometry": {"symmetry": "3d", "entry_height": 4.0, "exit_height": 3.2,
@@ -51,4 +53,24 @@ def test_auto_is_direct_below_the_threshold():
     """solver.linear = "auto" (the default) solves this small 3D mixed problem by MUMPS."""
     summary, krylov = _solved("auto")
     assert summary["converged"] and set(krylov) == {1}
-    assert MPI.COMM_WORLD.allreduce(summary["dofs"], op=MPI.MAX) < 200_000
+    assert summary["dofs"] < ITERATIVE_FROM
+
+
+def test_scale_case_row_and_growth_exponents():
+    """`forming bench --scale`'s case (the bar at 1.2 mm, iterative) in this process: its Newton
+    steps' Krylov iterations, and the exponent fit on rows whose time grows as N^1.5 and memory as
+    N^1 exactly."""
+    row = run_scale_case({"scale": True, "mesh_size": 1.2, "linear": "iterative"})
+    assert row["converged"] and row["ranks"] == MPI.COMM_WORLD.size
+    assert len(row["krylov_per_newton_step"]) >= 3
+    assert 1 < max(row["krylov_per_newton_step"]) <= 200
+    assert min(row["velocity_per_newton_step"]) > max(row["krylov_per_newton_step"]) - 1
+    rows = [{"linear": "direct", "ranks": 1, "dofs": n, "wall_time_s": 2.0 * n**1.5,
+             "solve_time_s": n**1.5, "peak_memory_mb": 3.0 * n} for n in (1e3, 8e3, 6.4e4)]
+    (fit,) = growth_exponents(rows)
+    assert fit["wall_time_s_exponent"] == pytest.approx(1.5, abs=1e-12)
+    assert fit["peak_memory_mb_exponent"] == pytest.approx(1.0, abs=1e-12)
+    shown = [{**r, "mesh_size": 1.0, "converged": True, "linear_solves": 9, "drawing_stress": 1.0,
+              "krylov_per_newton_step": [], "velocity_per_newton_step": [], "vs_direct": None}
+             for r in rows]
+    assert "| 1.50 | 1.50 | 1.00 |" in scale_table(shown)

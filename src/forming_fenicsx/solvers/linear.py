@@ -23,9 +23,10 @@ from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
 KRYLOV_FACTOR = 1e-8
 KRYLOV_FLOOR = 1e-12
 KRYLOV_CEILING = 1e-10
-# solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively
-# (docs/iterative_solver.md)
-ITERATIVE_FROM = 200_000
+# solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: the
+# iterative solver was slower than MUMPS at every size measured (3k to 40k unknowns), and MUMPS'
+# memory, extrapolated, reaches this machine's 24 GiB near a million (docs/iterative_solver.md)
+ITERATIVE_FROM = 1_000_000
 
 
 def iterative(problem: FlowProblem) -> bool:
