@@ -1,9 +1,11 @@
 """Closed-form and semi-analytic drawing and extrusion loads through conical and wedge dies, for
-orientation and verification (round-products reference, sections 1, 2 and 5).
+orientation and verification (round-products reference, sections 1, 2 and 5), and through dies of
+plane faces for rectangular bars (3D, derived here: the slab method and an upper bound).
 
 Angles are in degrees at the API (radians inside); r = 1 - A1/A0 is the reduction (of area for a
 round bar, of thickness for a strip). Stresses are dimensionless: over the flow stress sigma0 (or
-Ybar) of a round bar, over 2k = 2 sigma0/sqrt3 of a strip, unless a function takes K.
+Ybar) of a round bar or a rectangular one, over 2k = 2 sigma0/sqrt3 of a strip, unless a function
+takes K.
 """
 from __future__ import annotations
 
@@ -278,6 +280,167 @@ def nadai_wedge_factor(semi_angle: float, m: float) -> float:
         return -psi + c / root * math.atan(math.sqrt((c + 1) / (c - 1)) * math.tan(psi)) - alpha
 
     return _root(miss, *_bracket_decreasing(miss, 1 + m / alpha))
+
+
+# --- 3D: a rectangular bar through a die of plane faces (derived here) ---------------------------
+
+class RectangularDie(NamedTuple):
+    """The quarter of a rectangular bar's pass (half-sizes): half-heights h0 -> h1 and half-widths
+    w0 -> w1 over the cone length, the height faces' slope tan(alpha) (die_angle), the width faces'
+    tan(beta) = (w0 - w1)/length (the same cone length, as geometry.width_angle), and a land."""
+
+    h0: float
+    h1: float
+    w0: float
+    w1: float
+    tan_alpha: float
+    tan_beta: float
+    length: float
+    land: float
+
+    @classmethod
+    def of(cls, entry_height: float, exit_height: float, entry_width: float, exit_width: float,
+           semi_angle: float, land_length: float = 0.0) -> RectangularDie:
+        """From the scene's full sizes and the height faces' semi-angle (degrees)."""
+        if not (0 < exit_height < entry_height and 0 < exit_width <= entry_width
+                and 0 < semi_angle < 90 and land_length >= 0):
+            raise ValueError("need 0 < exit < entry height, 0 < exit <= entry width, "
+                             f"0 < semi_angle < 90, land >= 0; got {entry_height}, {exit_height}, "
+                             f"{entry_width}, {exit_width}, {semi_angle}, {land_length}")
+        tan_alpha = math.tan(math.radians(semi_angle))
+        length = 0.5 * (entry_height - exit_height) / tan_alpha
+        return cls(0.5 * entry_height, 0.5 * exit_height, 0.5 * entry_width, 0.5 * exit_width,
+                   tan_alpha, 0.5 * (entry_width - exit_width) / length, length, land_length)
+
+    @property
+    def width_angle(self) -> float:
+        """The width faces' semi-angle beta (degrees)."""
+        return math.degrees(math.atan(self.tan_beta))
+
+    @property
+    def log_area_ratio(self) -> float:
+        """ln(A0/A1), the ideal work over sigma0."""
+        return math.log(self.h0 * self.w0 / (self.h1 * self.w1))
+
+    def sections(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Half-height and half-width at x from the die entry (0 <= x <= length)."""
+        return self.h0 - x * self.tan_alpha, self.w0 - x * self.tan_beta
+
+    def effective_angle(self, x: float) -> float:
+        """The semi-angle (degrees) of the round die whose slab equation has the same
+        coefficient at x: tan(alpha_e) = (w tan alpha + h tan beta)/(h + w), the faces' slopes
+        weighted by their widths (the area's decrease per perimeter, -dA/dx = P tan alpha_e)."""
+        h, w = self.sections(np.asarray(x, dtype=float))
+        return math.degrees(math.atan(float((w * self.tan_alpha + h * self.tan_beta) / (h + w))))
+
+
+def sachs_rectangular_drawing_stress(die: RectangularDie, mu: float) -> float:
+    """Sachs' slab method for a rectangular bar through a die of plane faces with Coulomb friction
+    (derived here, Dieter's slab assumptions for the round die: plane sections, sigma_x + p = Ybar,
+    the die pressure p on every face), sigma_d/Ybar. The axial balance of a slice of the quarter
+    (area A = h w, the faces' slopes and widths) gives, with s = sigma_x/Ybar,
+
+        ds/dx = -d ln A/dx + mu (1/h + 1/w)(1 - s),   -d ln A/dx = tan(alpha)/h + tan(beta)/w,
+
+    linear in s, integrated exactly with its integrating factor E(x) = exp(int mu (1/h + 1/w));
+    over a land (A constant) s_f = 1 - (1 - s_d) exp(-mu L (1/h1 + 1/w1)). For a square (and any
+    die whose faces share one slope) it is Sachs' round-die formula of the same area reduction and
+    semi-angle (sachs_drawing_stress); mu = 0 gives ln(A0/A1) exactly.
+    """
+    def friction_log(x: np.ndarray) -> np.ndarray:  # int_0^x mu (1/h + 1/w)
+        h, w = die.sections(x)
+        width = (np.log(die.w0 / w) / die.tan_beta if die.tan_beta > 0 else x / die.w0)
+        return mu * (np.log(die.h0 / h) / die.tan_alpha + width)
+
+    end = float(friction_log(np.array(die.length)))
+
+    def source(x: np.ndarray) -> np.ndarray:
+        h, w = die.sections(x)
+        rate = die.tan_alpha / h + die.tan_beta / w + mu * (1 / h + 1 / w)
+        return rate * np.exp(friction_log(x) - end)
+
+    cone = _gauss_legendre(source, 0.0, die.length, nodes=48)
+    land = math.exp(-mu * die.land * (1 / die.h1 + 1 / die.w1))
+    return 1 - (1 - cone) * land
+
+
+def _corner_distance_mean(a: float, b: float) -> float:
+    """int_0^1 int_0^1 sqrt(a^2 s^2 + b^2 t^2) ds dt, the mean speed of the shear at an entry or
+    exit plane: int_0^a int_0^b sqrt(x^2 + y^2) dy dx / (a b), whose closed form is
+    [2 a b d + a^3 ln((b + d)/a) + b^3 ln((a + d)/b)]/6, d = sqrt(a^2 + b^2)."""
+    if a == 0.0 or b == 0.0:
+        return 0.5 * (a + b)
+    d = math.hypot(a, b)
+    return (2 * a * b * d + a**3 * math.log((b + d) / a) + b**3 * math.log((a + d) / b)) / (
+        6 * a * b)
+
+
+def _face_slip_mean(c: float, t: float) -> float:
+    """int_0^1 sqrt(c^2 + t^2 s^2) ds = [sqrt(c^2 + t^2) + (c^2/t) asinh(t/c)]/2 (c at t = 0)."""
+    if t == 0.0:
+        return c
+    return 0.5 * (math.hypot(c, t) + c * c / t * math.asinh(t / c))
+
+
+class BoundParts(NamedTuple):
+    """An upper bound's parts, each over sigma0 (the power per unit flux): the zone's internal
+    power, the shear at the entry and exit planes, the friction on the converging faces, the
+    friction on the land."""
+
+    internal: float
+    shear: float
+    friction: float
+    land: float
+
+    @property
+    def total(self) -> float:
+        return self.internal + self.shear + self.friction + self.land
+
+
+def rectangular_upper_bound(die: RectangularDie, m: float, nodes: int = 24) -> BoundParts:
+    """An upper bound on sigma_d/sigma0 for a rectangular bar through a die of plane faces with the
+    friction factor m (tau = m k), derived here: the homogeneous-compression field in which every
+    section stays a rectangle and each point keeps its place in it (y/h, z/w fixed),
+
+        u_x = U(x) = Q/(4 h w),   u_y = U y h'/h,   u_z = U z w'/w,
+
+    incompressible and tangent to every face, rigid before the entry plane and after the exit
+    plane (velocity jumps U sqrt((y/h)^2 tan^2 alpha + (z/w)^2 tan^2 beta) there). With
+    p = tan(alpha)/h, q = tan(beta)/w its strain rates are e_yy = -U p, e_zz = -U q,
+    e_xx = U (p + q), e_xy = -(U/2)(y/h) tan(alpha)(2p + q), e_xz = -(U/2)(z/w) tan(beta)(p + 2q),
+    e_yz = 0, and the power per unit flux and sigma0 is
+
+        internal: int_0^L dx int int sqrt((2/3)(e:e))/U d(y/h) d(z/w)   (Gauss-Legendre),
+        shear:    (2/sqrt3) J(tan alpha, tan beta),  J the mean of sqrt(tan^2 alpha s^2
+                  + tan^2 beta t^2) over the unit square (closed form, two planes),
+        friction: (m/sqrt3)[sec(alpha) G(sec alpha, tan beta) ln(h0/h1)/tan(alpha)
+                  + sec(beta) G(sec beta, tan alpha) int_0^L dx/w],  G(c, t) the mean of
+                  sqrt(c^2 + t^2 s^2) over [0, 1] (the slip speed over U on a face),
+        land:     (m/sqrt3) L_land (1/h1 + 1/w1).
+
+    Where the faces converge to one apex (similar sections: a square) its streamlines are the rays
+    toward it (a radial flow), with plane (not spherical, as Avitzur's) discontinuities. Without
+    width reduction and w -> infinity it is the plane-strain parallel field's bound; frictionless
+    and at small angles (a square) it tends to the ideal work ln(A0/A1).
+    """
+    a, b = die.tan_alpha, die.tan_beta
+    g, wg = np.polynomial.legendre.leggauss(nodes)
+    s, ws = 0.5 * (g + 1), 0.5 * wg  # on [0, 1]
+    x = die.length * s
+    h, w = die.sections(x)
+    p, q = (a / h)[:, None, None], (b / w)[:, None, None]
+    eta, zeta = s[None, :, None], s[None, None, :]
+    squares = ((p + q) ** 2 + p**2 + q**2 + 0.5 * (eta * a * (2 * p + q)) ** 2
+               + 0.5 * (zeta * b * (p + 2 * q)) ** 2)
+    rate = np.sqrt(2 / 3 * squares)  # over U
+    internal = die.length * float(np.einsum("i,j,k,ijk->", ws, ws, ws, rate))
+    shear = 2 / SQRT3 * _corner_distance_mean(a, b)
+    sec_a, sec_b = math.hypot(1, a), math.hypot(1, b)
+    width_log = math.log(die.w0 / die.w1) / b if b > 0 else die.length / die.w0
+    friction = m / SQRT3 * (sec_a * _face_slip_mean(sec_a, b) * math.log(die.h0 / die.h1) / a
+                            + sec_b * _face_slip_mean(sec_b, a) * width_log)
+    land = m / SQRT3 * die.land * (1 / die.h1 + 1 / die.w1)
+    return BoundParts(internal, shear, friction, land)
 
 
 # --- Section 5: central burst --------------------------------------------------------------------
