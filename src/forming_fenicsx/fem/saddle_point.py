@@ -1,9 +1,13 @@
-"""The iterative solver of the mixed formulation's saddle point (solver.linear = "iterative"):
+"""The iterative solver of the mixed formulation's saddle point (solver.linear = "iterative"): an
+augmented Lagrangian, a symmetric scaling, and FGMRES with a fieldsplit Schur preconditioner and
+algebraic multigrid on the velocity block.
+
+The system
 
     [A  B^T] [u]   [f]          A: the velocity block (secant b(w; u, v) of (3.5), or Newton's
-    [B   0 ] [p] = [g],         operator), B: -(q, div u), g: the Dirichlet data's lifting.
+    [B   0 ] [p] = [g],         operator), B: -(q, div u), g: the Dirichlet data's lifting,
 
-solved as the augmented system (augmented Lagrangian, Benzi and Olshanskii 2006)
+is solved as the augmented system (augmented Lagrangian, Benzi and Olshanskii 2006)
 
     [A + gamma B^T D^-1 B   B^T] [u]   [f + gamma B^T D^-1 g]
     [B                       0 ] [p] = [g                   ],
