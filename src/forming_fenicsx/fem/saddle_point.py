@@ -42,7 +42,7 @@ OPTIONS: dict[str, Any] = {
     "ksp_type": "fgmres", "ksp_gmres_restart": 200, "ksp_max_it": 200,
     "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur",
     "pc_fieldsplit_schur_fact_type": "upper", "pc_fieldsplit_schur_precondition": "user",
-    "fieldsplit_u_ksp_type": "cg", "fieldsplit_u_ksp_rtol": 1e-2, "fieldsplit_u_ksp_max_it": 50,
+    "fieldsplit_u_ksp_type": "gmres", "fieldsplit_u_ksp_rtol": 1e-2, "fieldsplit_u_ksp_max_it": 50,
     "fieldsplit_u_pc_type": "gamg", "fieldsplit_u_pc_gamg_threshold": 0.02,
     "fieldsplit_p_ksp_type": "preonly", "fieldsplit_p_pc_type": "jacobi"}
 
@@ -98,10 +98,8 @@ class AugmentedSaddlePoint:
         bs = space.dofmap.index_map_bs
         self.rows = PETSc.IS().createStride((end - start) * bs, start * bs, 1, comm=comm)
         self._modes = rigid_body_modes(velocity, order)
-        self._mode_vectors = [PETSc.Vec().createMPI((len(order), PETSc.DECIDE), comm=comm)
-                              for _ in self._modes]
-        self.modes = PETSc.NullSpace().create(vectors=self._mode_vectors, comm=comm)
-        self.velocity.compose("nearnullspace", self.modes)
+        self.modes: PETSc.NullSpace | None = None  # in the scaled unknowns (scale)
+        self._ksp: PETSc.KSP | None = None
         self._scale: PETSc.Vec | None = None  # S
         p, q = ufl.TrialFunctions(space)[1], ufl.TestFunctions(space)[1]
         self._weight = dolfinx.fem.form(3.0 / secant * p * q * dx)
@@ -162,20 +160,38 @@ class AugmentedSaddlePoint:
         velocity = scale.getSubVector(self.velocity)
         velocity.sqrtabs()
         velocity.reciprocal()
-        for vector, values in zip(self._mode_vectors, self._modes):
-            vector.array[:] = values / velocity.array
+        self._set_modes(velocity)
         scale.restoreSubVector(self.velocity, velocity)
         pressure = scale.getSubVector(self.pressure)
         self._inverse.copy(pressure)
         pressure.scale(1.0 + self.gamma)
         pressure.sqrtabs()
         scale.restoreSubVector(self.pressure, pressure)
-        for k, vector in enumerate(self._mode_vectors):  # Gram-Schmidt
-            for previous in self._mode_vectors[:k]:
-                vector.axpy(-vector.dot(previous), previous)
-            vector.normalize()
         A.diagonalScale(scale, scale)
         b.pointwiseMult(b, scale)
+
+    def _set_modes(self, velocity_scale: PETSc.Vec) -> None:
+        """The near-null space of the scaled velocity block, S^-1 r for the rigid motions r,
+        orthonormal: a new one each time (PETSc locks a null space's vectors), composed with the
+        velocity field and set on the fieldsplit's velocity matrix once it exists."""
+        comm = velocity_scale.getComm()
+        vectors = []
+        for values in self._modes:
+            vector = velocity_scale.duplicate()
+            vector.array[:] = values / velocity_scale.array
+            for previous in vectors:  # Gram-Schmidt
+                vector.axpy(-vector.dot(previous), previous)
+            vector.normalize()
+            vectors.append(vector)
+        modes = PETSc.NullSpace().create(vectors=vectors, comm=comm)
+        for vector in vectors:  # the null space holds them
+            vector.destroy()
+        self.velocity.compose("nearnullspace", modes)
+        if self._ksp is not None:
+            self._ksp.getPC().getFieldSplitSubKSP()[0].getOperators()[1].setNearNullSpace(modes)
+        if self.modes is not None:
+            self.modes.destroy()
+        self.modes = modes
 
     def unscale(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> None:
         """A <- S^-1 A S^-1, b <- S^-1 b, and the solution x = S y of the scaled system."""
@@ -196,6 +212,7 @@ class AugmentedSaddlePoint:
         pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)
         ksp.setUp()
         pc.getFieldSplitSubKSP()[0].setMonitor(self._count)
+        self._ksp = ksp
 
     def _count(self, ksp: PETSc.KSP, iteration: int, residual: float) -> None:
         if iteration > 0:
@@ -203,6 +220,6 @@ class AugmentedSaddlePoint:
 
     def destroy(self) -> None:
         for item in (self._weight_matrix, self.schur, self._inverse, self._B, self.modes,
-                     *self._mode_vectors, self._scale, self.velocity, self.pressure, self.rows):
+                     self._scale, self.velocity, self.pressure, self.rows):
             if item is not None:
                 item.destroy()
