@@ -94,7 +94,7 @@ def scale_table(rows: list[dict[str, Any]]) -> str:
 
     table = markdown_table("forming bench --scale", [
         "h", "ranks", "linear solver", "unknowns", "converged", "linear solves", "wall s",
-        "solve s", "peak MB", "Krylov per Newton step", "velocity CG per Newton step",
+        "solve s", "peak MB", "Krylov per Newton step", "velocity-block iterations per Newton step",
         "drawing stress", "vs direct"],
         [[r["mesh_size"], r["ranks"], r["linear"], r["dofs"], r["converged"], r["linear_solves"],
           f"{r['wall_time_s']:.1f}", f"{r['solve_time_s']:.1f}", f"{r['peak_memory_mb']:.0f}",

@@ -21,7 +21,7 @@ residual then weighs every row alike (unscaled, the rows of the rigid zones, who
 rate window's 1e6 times larger, decide it, and the pressure of the plastic zone is left far less
 accurate than the residual says). PETSc fieldsplit
 (Schur, upper factorisation) under the solver's options prefix: algebraic multigrid on the velocity
-block (conjugate gradients to 1e-2 preconditioned by GAMG with the rigid-body near-null space: one
+block (GMRES to 1e-2 preconditioned by GAMG with the rigid-body near-null space: one
 V-cycle alone left the outer iteration 20 to 40 times longer), the Schur preconditioner (-1 on the
 scaled pressures), FGMRES outside.
 """
