@@ -98,7 +98,6 @@ def write_die_faces(samples: FacetSamples, names: list[str], path: Path, heading
             plain_ticks(ax)
         bar = make_axes_locatable(axes[row][-1]).append_axes("right", size="4%", pad=0.1)
         fig.colorbar(mapped, cax=bar, label=bracketed(SHOWN[name][0], unit))
-    heading.put_above(fig, list(axes.flat), "stresses on the die over its faces, with the die's "
-                      "edges")
-    fig.tight_layout()
+    fig.tight_layout(rect=heading.put_above(fig, list(axes.flat), "stresses on the die over its "
+                                            "faces, with the die's edges"))
     return save(fig, path)

@@ -86,12 +86,16 @@ class Heading:
         ax.set_title(text, **style)
         self.mark(ax)
 
-    def put_above(self, fig: Any, axes: list[Any], what: str) -> None:
-        """The title of ``put`` above a figure of several panels, "NOT CONVERGED" across each."""
+    def put_above(self, fig: Any, axes: list[Any], what: str) -> tuple[float, float, float, float]:
+        """The title of ``put`` above a figure of several panels, "NOT CONVERGED" across each;
+        returns the rectangle (figure fractions) that leaves the title its lines, for
+        fig.tight_layout(rect=...): tight_layout alone lays the top panels' titles over it."""
         text, style = self._title(what)
         fig.suptitle(text, **style)
         for ax in axes:
             self.mark(ax)
+        lines = text.count("\n") + 1
+        return (0.0, 0.0, 1.0, 1.0 - (0.17 * lines + 0.1) / fig.get_figheight())
 
     def _title(self, what: str) -> tuple[str, dict[str, Any]]:
         """The title's text and style: the run and its settings, ``what`` the figure shows, led by
