@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import shutil
 import subprocess
 import sys
@@ -20,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from forming_fenicsx.app.bench_scale import (DEFAULT_SCALE_SIZES, growth_exponents,
-                                             run_scale_case, scale_bench, scale_table)
+                                             peak_memory_mb, run_scale_case, scale_bench,
+                                             scale_table)
 from forming_fenicsx.core.report import markdown_table
 
 DEMOS = Path(__file__).resolve().parents[3] / "demos"
@@ -76,7 +76,6 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = scene_from_dict(data)
     summary = solve_scene(scene)[2]
     comm = MPI.COMM_WORLD
-    peak = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.SUM) / 1024.0
     split = summary["time_split_s"]
     solves = max(summary["linear_solves"], 1)
     return {**case, "ranks": comm.size, "dofs": summary["dofs"], "converged": summary["converged"],
@@ -84,8 +83,8 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
                 f"{key}_s": value for key, value in split.items()},
             "outside_per_solve_s": (split["assembly"] + split["rest"]) / solves,
             "factor_solve_per_solve_s": (split["factorisation"] + split["solve"]) / solves,
-            "peak_memory_mb": peak, "quantity": quantity, "value": summary[quantity],
-            "exact": exact_value(scene, quantity),
+            "peak_memory_mb": peak_memory_mb(comm), "quantity": quantity,
+            "value": summary[quantity], "exact": exact_value(scene, quantity),
             "force_balance_residual": summary["force_balance_residual"],
             "solve_error_estimate": summary["solve_error_estimate"],
             "mean_flow_stress": summary.get("mean_flow_stress")}

@@ -26,6 +26,13 @@ SCALE_BAR: dict[str, dict[str, Any]] = {
 DEFAULT_SCALE_SIZES = [1.0, 0.7, 0.5]
 
 
+def peak_memory_mb(comm) -> float:
+    """The peak resident memory of this process summed over the ranks, in MB."""
+    from mpi4py import MPI
+
+    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.SUM) / 1024.0
+
+
 def run_scale_case(case: dict[str, Any]) -> dict[str, Any]:
     """Solve the bar at case["mesh_size"] with case["linear"] in this process (all ranks)."""
     from mpi4py import MPI
@@ -38,14 +45,13 @@ def run_scale_case(case: dict[str, Any]) -> dict[str, Any]:
     data["solver"]["linear"] = case["linear"]
     _, result, summary = solve_scene(scene_from_dict(data))
     comm = MPI.COMM_WORLD
-    peak = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.SUM) / 1024.0
     newton = [record for record in result.history if not math.isnan(record.residual)]
     split = summary["time_split_s"]
     return {**case, "ranks": comm.size, "dofs": summary["dofs"],
             "converged": summary["converged"], "linear_solves": summary["linear_solves"],
             "wall_time_s": summary["wall_time_s"],
             "solve_time_s": split["factorisation"] + split["solve"],
-            "peak_memory_mb": peak, "drawing_stress": summary["drawing_stress"],
+            "peak_memory_mb": peak_memory_mb(comm), "drawing_stress": summary["drawing_stress"],
             "krylov_per_newton_step": [record.krylov_iterations for record in newton],
             "velocity_per_newton_step": [record.velocity_iterations for record in newton]}
 

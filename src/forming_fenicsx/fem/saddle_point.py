@@ -104,10 +104,14 @@ class AugmentedSaddlePoint:
         p, q = ufl.TrialFunctions(space)[1], ufl.TestFunctions(space)[1]
         self._weight = dolfinx.fem.form(3.0 / secant * p * q * dx)
         self._weight_matrix = dolfinx.fem.petsc.create_matrix(self._weight)
-        self.schur: PETSc.Mat | None = None  # -D/(1 + gamma) on the pressure dofs
-        self._inverse: PETSc.Vec | None = None  # D^-1
-        self._B: PETSc.Mat | None = None  # the pressure rows of the last augmented matrix
-        self._configured = False
+        # the Schur preconditioner -D/(1 + gamma) scaled by S^2 (scale): -1 on the pressure dofs
+        sizes = (len(pressure_dofs), PETSc.DECIDE)
+        self.schur = PETSc.Mat().createAIJ((sizes, sizes), nnz=1, comm=comm)
+        self._inverse = self.schur.createVecLeft()  # D^-1
+        self._inverse.set(-1.0)
+        self.schur.setDiagonal(self._inverse)
+        self.schur.assemble()
+        self._B: PETSc.Mat | None = None  # the pressure rows of the system (constant)
         self.velocity_iterations = 0  # the velocity block's Krylov iterations, all solves
 
     def augment_matrix(self, A: PETSc.Mat) -> None:
@@ -117,25 +121,15 @@ class AugmentedSaddlePoint:
         M.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(M, self._weight)
         M.assemble()
-        diagonal = M.createSubMatrix(self.pressure, self.pressure).getDiagonal()
-        if self._inverse is None:
-            self._inverse = diagonal.duplicate()
-        diagonal.copy(self._inverse)
+        M.createSubMatrix(self.pressure, self.pressure).getDiagonal(self._inverse)
         self._inverse.reciprocal()
-        if self.schur is None:
-            self.schur = PETSc.Mat().createAIJ((diagonal.getSizes(), diagonal.getSizes()), nnz=1,
-                                               comm=diagonal.getComm())
-        diagonal.set(-1.0)  # -D/(1 + gamma) scaled by S^2
-        self.schur.setDiagonal(diagonal)
-        self.schur.assemble()
-        if self._B is not None:
-            self._B.destroy()
-        self._B = A.createSubMatrix(self.pressure, self.rows)
+        if self._B is None:  # -(q, div u) does not change with the state
+            self._B = A.createSubMatrix(self.pressure, self.rows)
         scaled = self._B.copy()
         scaled.diagonalScale(L=self._inverse)
         product = self._B.transposeMatMult(scaled)
         A.axpy(self.gamma, product, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        for item in (scaled, product, diagonal):
+        for item in (scaled, product):
             item.destroy()
 
     def augment_vector(self, b: PETSc.Vec) -> None:
@@ -204,9 +198,8 @@ class AugmentedSaddlePoint:
 
     def configure(self, ksp: PETSc.KSP) -> None:
         """The fieldsplit's two fields and its Schur preconditioner, once (after augment_matrix)."""
-        if self._configured:
+        if self._ksp is not None:
             return
-        self._configured = True
         pc = ksp.getPC()
         pc.setFieldSplitIS(("u", self.velocity), ("p", self.pressure))
         pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)

@@ -137,9 +137,9 @@ class LinearSolver(LinearProblem):
         rounding size, so the estimate is about the condition number of K times the machine
         precision: it shows when a small penalty parameter (1/d, 1/d_N, 1/d_T in K) makes the linear
         systems ill-conditioned. Iteratively: NaN (the Krylov's residual is its rtol's)."""
-        x = self._x
         if self.saddle_point is not None:  # not estimated: the Krylov stops at its rtol
             return math.nan
+        x = self._x
         start = time.perf_counter()
         self.A.mult(x, self._residual)
         self._residual.aypx(-1.0, self.b)
