@@ -19,7 +19,7 @@ from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
 
 # the iterative solves' relative residual: KRYLOV_FACTOR times the last relative increment of the
 # nonlinear iteration, within [KRYLOV_FLOOR, KRYLOV_CEILING]: looser solves moved the converged
-# answer of a hardening bar by 1 % (docs/iterative_solver.md)
+# answer of a hardening bar by 0.7 % (docs/iterative_solver.md)
 KRYLOV_FACTOR = 1e-8
 KRYLOV_FLOOR = 1e-12
 KRYLOV_CEILING = 1e-10
