@@ -40,6 +40,7 @@ GAMMA = 10.0
 # the options under the KSP's prefix (a scene's solver.petsc_options override any)
 OPTIONS: dict[str, Any] = {
     "ksp_type": "fgmres", "ksp_gmres_restart": 200, "ksp_max_it": 200,
+    "ksp_initial_guess_nonzero": True, "ksp_converged_use_initial_residual_norm": True,
     "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur",
     "pc_fieldsplit_schur_fact_type": "upper", "pc_fieldsplit_schur_precondition": "user",
     "fieldsplit_u_ksp_type": "gmres", "fieldsplit_u_ksp_rtol": 1e-2, "fieldsplit_u_ksp_max_it": 50,
@@ -144,9 +145,10 @@ class AugmentedSaddlePoint:
         for item in (weighted, extra):
             item.destroy()
 
-    def scale(self, A: PETSc.Mat, b: PETSc.Vec) -> None:
-        """A <- S A S and b <- S b (after augment_matrix and augment_vector; unscale undoes it),
-        and the near-null space's modes in the scaled unknowns, S^-1 r, orthonormal."""
+    def scale(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        """A <- S A S, b <- S b and the initial guess x <- S^-1 x (after augment_matrix and
+        augment_vector; unscale undoes it), and the near-null space's modes in the scaled
+        unknowns, S^-1 r, orthonormal."""
         if self._scale is None:
             self._scale = b.duplicate()
         scale = self._scale
@@ -163,6 +165,7 @@ class AugmentedSaddlePoint:
         scale.restoreSubVector(self.pressure, pressure)
         A.diagonalScale(scale, scale)
         b.pointwiseMult(b, scale)
+        x.pointwiseDivide(x, scale)
 
     def _set_modes(self, velocity_scale: PETSc.Vec) -> None:
         """The near-null space of the scaled velocity block, S^-1 r for the rigid motions r,

@@ -20,9 +20,13 @@ from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
 # the iterative solves' relative residual: KRYLOV_FACTOR times the last relative increment of the
 # nonlinear iteration, within [KRYLOV_FLOOR, KRYLOV_CEILING]: looser solves moved the converged
 # answer of a hardening bar by 0.7 % (docs/iterative_solver.md)
-KRYLOV_FACTOR = 1e-8
-KRYLOV_FLOOR = 1e-12
-KRYLOV_CEILING = 1e-10
+# the iterative solves' relative residual (relative to the initial one: the current iterate's for
+# the secant systems, F's for Newton's): KRYLOV_FACTOR times the last relative increment of the
+# nonlinear iteration, within [KRYLOV_FLOOR times solver.tolerance, KRYLOV_CEILING]: tighter than
+# the nonlinear iteration's own error (docs/iterative_solver.md)
+KRYLOV_FACTOR = 1e-3
+KRYLOV_FLOOR = 1e-3
+KRYLOV_CEILING = 1e-3
 # solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: the
 # iterative solver was slower than MUMPS at every size measured (3k to 40k unknowns), and MUMPS'
 # memory, extrapolated, reaches this machine's 24 GiB near a million (docs/iterative_solver.md)
@@ -75,6 +79,8 @@ class LinearSolver(LinearProblem):
         self._residual = self.b.duplicate()
         self._correction = self.b.duplicate()
         self._x: PETSc.Vec | None = None
+        if self.saddle_point is not None and matrix_of is None:
+            self.ksp.setTolerances(rtol=KRYLOV_CEILING)  # the first solve's: follow sets the next
 
     def assemble_matrix(self) -> None:
         super().assemble_matrix()
@@ -101,7 +107,7 @@ class LinearSolver(LinearProblem):
             return
         b = self.b if b is None else b
         self.saddle_point.augment_vector(b)
-        self.saddle_point.scale(self.A, b)
+        self.saddle_point.scale(self.A, b, x)
         self.saddle_point.configure(self.ksp)
         try:
             super().solve_system(x, b)
@@ -117,7 +123,8 @@ class LinearSolver(LinearProblem):
         """The next iterative solve's relative residual from the nonlinear iteration's last
         relative increment (KRYLOV_FACTOR)."""
         if self.saddle_point is not None and math.isfinite(increment):
-            rtol = min(max(KRYLOV_FACTOR * increment, KRYLOV_FLOOR), KRYLOV_CEILING)
+            floor = KRYLOV_FLOOR * self.problem.scene.solver.tolerance
+            rtol = min(max(KRYLOV_FACTOR * increment, floor), KRYLOV_CEILING)
             self.ksp.setTolerances(rtol=rtol)
 
     @property

@@ -161,6 +161,7 @@ class NewtonSolver(SecantSolver):
         self.assemble_operator()
         law_switches, contact_switches = self.count_switches()
         inner_before = self.newton.velocity_iterations
+        du.set(0.0)  # the iterative solver's initial guess: its tolerance is relative to F's norm
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
