@@ -173,6 +173,15 @@ def newton_failed(cause: str, steps: list[IterationRecord]) -> str:
             f"{newton_trigger(steps)}")
 
 
+def newton_linear_failure(inner: int, error: Exception, scene: Scene) -> str:
+    """How Newton's method failed when its linear solve did (before the direct method took over)."""
+    note = ""
+    if getattr(scene.material, "rate_factor", None) == "none" and "Krylov" in str(error):
+        note = (" (the tangent of a rate-independent law has almost no stiffness along the flow "
+                "direction: MUMPS solves it, the Krylov solver does not)")
+    return f"Newton's linear solve failed at step {inner}: {error}{note}"
+
+
 def after_fallback(reason: str, failed: str) -> str:
     """The direct method's reason, after Newton's method failed."""
     return (f"{reason}, by the direct method (3.13) after {failed} (set solver.method = \"direct\" "

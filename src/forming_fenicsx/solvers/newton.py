@@ -74,6 +74,7 @@ class NewtonSolver(SecantSolver):
         self._contact_set = None if self.forms.contact_set is None else \
             dolfinx.fem.petsc.create_vector(self.forms.contact_set)
         self._newton_start: dolfinx.fem.Function | None = None  # u when the Newton steps began
+        self._solve_failure = ""  # how Newton's linear solve failed, if it did
         self._newton_first = 0  # the history's index of the first Newton step
         self._coupled_start: list[object] = []  # the coupled fields' values then (snapshot)
         # G' = 0 at the owned Gauss points, and the die nodes in contact, at the last operator
@@ -166,6 +167,7 @@ class NewtonSolver(SecantSolver):
             self.newton.solve_system(du)
         except LinearSolveError as error:
             result.reason = messages.newton_solve_failed(inner, error)
+            self._solve_failure = messages.newton_linear_failure(inner, error, problem.scene)
             return math.nan
         result.linear_solves += 1
         # relative to u
@@ -312,6 +314,7 @@ class NewtonSolver(SecantSolver):
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
         result.outer_iterations = 1
+        self._solve_failure = ""
         if not self._start(initial, result, start):
             return result
         friction_note = messages.newton_friction_note(problem.scene, settings.tolerance,
@@ -360,7 +363,7 @@ class NewtonSolver(SecantSolver):
         if result.converged or result.cause not in FALL_BACK_ON or self._newton_start is None:
             return result
         steps = result.history[self._newton_first:]
-        failed = messages.newton_failed(result.cause, steps)
+        failed = self._solve_failure or messages.newton_failed(result.cause, steps)
         if self.problem.comm.rank == 0:
             log.warning("%s: the direct method (3.13) goes on from the secant start's iterate",
                         failed)
