@@ -28,9 +28,10 @@ KRYLOV_FACTOR = 1e-3
 KRYLOV_FLOOR = 1e-3
 KRYLOV_CEILING = 1e-3
 # solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: the
-# iterative solver was slower than MUMPS at every size measured (3k to 40k unknowns), and MUMPS'
-# memory, extrapolated, reaches this machine's 24 GiB near a million (docs/iterative_solver.md)
-ITERATIVE_FROM = 1_000_000
+# iterative solver was slower than MUMPS at every size both solved (3k to 92k unknowns), and MUMPS'
+# memory, extrapolated (N^1.27), reaches this machine's 24 GiB near 700k unknowns, where the
+# iterative solver's, 17 GB at 925k, still fits (docs/iterative_solver.md)
+ITERATIVE_FROM = 500_000
 
 
 def iterative(problem: FlowProblem) -> bool:
