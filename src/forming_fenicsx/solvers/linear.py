@@ -17,9 +17,6 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.fem.linear_problem import LinearProblem
 from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
 
-# the iterative solves' relative residual: KRYLOV_FACTOR times the last relative increment of the
-# nonlinear iteration, within [KRYLOV_FLOOR, KRYLOV_CEILING]: looser solves moved the converged
-# answer of a hardening bar by 0.7 % (docs/iterative_solver.md)
 # the iterative solves' relative residual (relative to the initial one: the current iterate's for
 # the secant systems, F's for Newton's): KRYLOV_FACTOR times the last relative increment of the
 # nonlinear iteration, within [KRYLOV_FLOOR times solver.tolerance, KRYLOV_CEILING]: tighter than

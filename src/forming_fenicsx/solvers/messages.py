@@ -173,10 +173,11 @@ def newton_failed(cause: str, steps: list[IterationRecord]) -> str:
             f"{newton_trigger(steps)}")
 
 
-def newton_linear_failure(inner: int, error: Exception, scene: Scene) -> str:
-    """How Newton's method failed when its linear solve did (before the direct method took over)."""
+def newton_linear_failure(inner: int, error: Exception, scene: Scene, iterative: bool) -> str:
+    """How Newton's method failed when its linear solve (``iterative``: by the Krylov solver) did,
+    before the direct method took over."""
     note = ""
-    if getattr(scene.material, "rate_factor", None) == "none" and "Krylov" in str(error):
+    if iterative and getattr(scene.material, "rate_factor", None) == "none":
         note = (" (the tangent of a rate-independent law has almost no stiffness along the flow "
                 "direction: MUMPS solves it, the Krylov solver does not)")
     return f"Newton's linear solve failed at step {inner}: {error}{note}"

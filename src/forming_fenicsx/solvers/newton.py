@@ -167,7 +167,8 @@ class NewtonSolver(SecantSolver):
             self.newton.solve_system(du)
         except LinearSolveError as error:
             result.reason = messages.newton_solve_failed(inner, error)
-            self._solve_failure = messages.newton_linear_failure(inner, error, problem.scene)
+            self._solve_failure = messages.newton_linear_failure(
+                inner, error, problem.scene, self.newton.saddle_point is not None)
             return math.nan
         result.linear_solves += 1
         # relative to u
