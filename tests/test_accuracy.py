@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.core.richardson import FACTOR, MIN_ORDER, estimate, observed_order, relative
-from forming_fenicsx.solvers.accuracy import next_mesh_size
+from forming_fenicsx.core.richardson import (FACTOR, MIN_ORDER, estimate, extrapolation_error,
+                                             observed_order, relative)
+from forming_fenicsx.solvers.accuracy import choose_answer, next_mesh_size
 from forming_fenicsx.app.cli import accuracy_override, main
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.fem.forms import FlowProblem
@@ -94,6 +95,40 @@ def test_next_mesh_size_predicts_from_the_order_within_limits():
     assert next_mesh_size(0.1, found, 0.015, 0.001, 2.0) == pytest.approx(0.1 / 3.0)  # MAX_RATIO
     assert next_mesh_size(0.1, found, 0.0101, 0.01, 2.0) == pytest.approx(0.1 / 1.5)  # MIN_RATIO
     assert next_mesh_size(0.1, None, math.inf, 0.01, 2.0) == pytest.approx(0.05)
+    # after the third mesh at most by the ratio: the fourth gives the extrapolation its estimate
+    assert next_mesh_size(0.1, found, 0.015, 0.001, 2.0, meshes=3) == pytest.approx(0.05)
+    assert next_mesh_size(0.1, found, 0.015, 0.01, 2.0, meshes=3) == pytest.approx(0.1 / 1.875)
+    assert next_mesh_size(0.1, found, 0.015, 0.001, 2.0, meshes=4) == pytest.approx(0.1 / 3.0)
+
+
+def test_the_extrapolation_is_estimated_by_its_change_when_a_mesh_is_added():
+    """f = 2 + h + h^2: the limit from the last three meshes moves toward 2 as meshes are added;
+    the change (0.036) lies between the current limit's error (0.021) and the finest value's."""
+    sizes = [0.8, 0.4, 0.2, 0.1]
+    values = [2 + h + h**2 for h in sizes]
+    assert math.isnan(extrapolation_error(sizes[:3], values[:3], degree=2))
+    change = extrapolation_error(sizes, values, degree=2)
+    last, before = estimate(sizes, values, 2), estimate(sizes[:3], values[:3], 2)
+    assert change == pytest.approx(abs(last.extrapolated - before.extrapolated), abs=1e-15)
+    assert abs(last.extrapolated - 2) < change < abs(values[-1] - 2)
+    answer = choose_answer(sizes, values, last, degree=2)
+    assert answer.kind == "extrapolated" and answer.value == last.extrapolated
+    assert answer.estimate == pytest.approx(change / abs(last.extrapolated), abs=1e-15)
+    assert "less than the finest value's" in answer.reason
+
+
+def test_the_finest_value_is_the_answer_without_an_asymptotic_extrapolation():
+    """Three meshes, or an oscillation among the first four: no estimate of the extrapolation's
+    own; the finest value with Richardson's (or the guarded) estimate."""
+    sizes = [0.8, 0.4, 0.2, 0.1]
+    values = [2 + h for h in sizes]
+    three = choose_answer(sizes[:3], values[:3], estimate(sizes[:3], values[:3], 2), degree=2)
+    assert three.kind == "finest" and three.value == values[2]
+    assert three.estimate == pytest.approx(FACTOR * 0.2 / 2, abs=1e-12)
+    wobbly = [2.5, 2.3, 2.4] + [2 + 0.1]
+    assert math.isnan(extrapolation_error(sizes, wobbly, degree=2))
+    answer = choose_answer(sizes, wobbly, estimate(sizes, wobbly, 2), degree=2)
+    assert answer.kind == "finest" and "no estimate of its own" in answer.reason
 
 
 ROD = Path(__file__).parents[1] / "demos" / "aluminium_rod.toml"
@@ -165,6 +200,8 @@ def test_forming_run_accuracy_reaches_the_target_with_an_honest_estimate(shared_
     assert accuracy["value"] == summary["ram_pressure"]
     true = abs(accuracy["value"] / (1 + math.pi / 2) - 1)
     assert 1 / 1.5 < accuracy["estimate"] / true < 1.5
+    assert accuracy["answer"] == "finest" and accuracy["answer_value"] == accuracy["value"]
+    assert accuracy["answer_estimate"] == accuracy["estimate"]
 
 
 def test_a_target_not_reached_exits_3_with_the_best_value_and_its_estimate(shared_tmp, capsys):

@@ -238,8 +238,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                  summary["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]
-            log.info("accuracy: %s = %.6g, extrapolated %.6g, estimated error %.3g %% (target "
-                     "%g %%) on %d meshes, %.1f s: %s", accuracy["quantity"], accuracy["value"],
-                     accuracy["extrapolated"], 100 * accuracy["estimate"], 100 * accuracy["target"],
+            log.info("accuracy: %s = %.6g (%s; finest %.6g, estimated error %.3g %%), estimated "
+                     "error %.3g %% (target %g %%) on %d meshes, %.1f s: %s",
+                     accuracy["quantity"], accuracy["answer_value"], accuracy["answer"],
+                     accuracy["value"], 100 * accuracy["estimate"],
+                     100 * accuracy["answer_estimate"], 100 * accuracy["target"],
                      len(accuracy["meshes"]), accuracy["wall_time_s"], accuracy["reason"])
     return summary

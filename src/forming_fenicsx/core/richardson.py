@@ -10,6 +10,11 @@ change sign (an oscillation) the estimate is FACTOR |f3 - f2| and nothing is ext
 the observed order lies outside [MIN_ORDER, 2(k + 1)] (k the element degree) it is clipped to that
 range and the estimate is FACTOR times the larger of the clipped Richardson error and |f3 - f2|.
 FACTOR = 1.25 is Roache's factor of safety of the grid convergence index for three meshes.
+
+The extrapolated value's own error, from four meshes or more: |F_n - F_(n-1)|, the change of the
+limit when the finest mesh was added (F_(n-1) from the three meshes before it), when both limits
+come from Richardson's rule (an asymptotic sequence). It is the error of F_(n-1) rather than of
+F_n: on the side of safety wherever the limits converge.
 """
 from __future__ import annotations
 
@@ -99,6 +104,18 @@ def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
                     f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not "
                     f"asymptotic): the larger of Richardson's with order {clipped:g} and the last "
                     "two values' difference")
+
+
+def extrapolation_error(sizes: list[float], values: list[float], degree: int) -> float:
+    """The estimated absolute error of the extrapolated value of the last three meshes: the change
+    of the limit when the finest mesh was added (module docstring); NaN with fewer than four
+    meshes or when either limit is not Richardson's (no asymptotic sequence)."""
+    if len(values) < 4:
+        return math.nan
+    last, before = estimate(sizes, values, degree), estimate(sizes[:-1], values[:-1], degree)
+    if last.kind != "richardson" or before.kind != "richardson":
+        return math.nan
+    return abs(last.extrapolated - before.extrapolated)
 
 
 def relative(found: Estimate, value: float) -> float:

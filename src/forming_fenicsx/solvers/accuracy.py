@@ -1,7 +1,9 @@
 """Accuracy on demand: a scene solved on a sequence of finer meshes, each started from the previous
-solution interpolated onto it (transfer.py), until the estimated error of its main quantity is below
-a target. The estimate is Richardson's with its guards (core/richardson.py); docs/accuracy.md
-measures how it compares with the true error.
+solution interpolated onto it (transfer.py), until the estimated error of its answer is below a
+target. The answer is the finest mesh's value with Richardson's estimate (with its guards), or,
+from four meshes in the asymptotic range, the extrapolated value with the change of the
+extrapolation as its estimate, whichever estimate is smaller (core/richardson.py); docs/accuracy.md
+measures how both compare with the true error.
 """
 from __future__ import annotations
 
@@ -9,13 +11,14 @@ import copy
 import logging
 import math
 import time
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import dolfinx.fem
 from mpi4py import MPI
 
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.core.richardson import Estimate, estimate, relative
+from forming_fenicsx.core.richardson import Estimate, estimate, extrapolation_error, relative
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.solvers.records import SolveResult
 
@@ -25,14 +28,47 @@ MIN_RATIO, MAX_RATIO = 1.5, 3.0  # the refinement a prediction may choose
 
 
 def next_mesh_size(size: float, found: Estimate | None, relative_error: float, target: float,
-                   ratio: float) -> float:
+                   ratio: float, meshes: int = 0) -> float:
     """The next level's mesh size: size/ratio until an asymptotic estimate exists, then the size
     that the observed order predicts for SAFETY times the target, refined by a factor within
-    [MIN_RATIO, MAX_RATIO]."""
+    [MIN_RATIO, MAX_RATIO]; after the third of ``meshes`` at most by ``ratio``: the fourth gives
+    the extrapolated value its own estimate, which may reach the target first (choose_answer)."""
     if found is None or found.kind != "richardson":
         return size / ratio
     wanted = (relative_error / (SAFETY * target)) ** (1.0 / found.order)
-    return size / min(max(wanted, MIN_RATIO), MAX_RATIO)
+    refine = min(max(wanted, MIN_RATIO), MAX_RATIO)
+    return size / (min(refine, max(ratio, MIN_RATIO)) if meshes == 3 else refine)
+
+
+@dataclass
+class Answer:
+    """The sequence's answer: which value ("finest" or "extrapolated"), the value, its estimated
+    relative error and why it was chosen."""
+
+    kind: str
+    value: float
+    estimate: float
+    reason: str
+
+
+def choose_answer(sizes: list[float], values: list[float], found: Estimate, degree: int) -> Answer:
+    """The extrapolated value when its estimate (the change of the extrapolation when the finest
+    mesh was added, relative to it) is smaller than the finest value's, else the finest value."""
+    finest = float(relative(found, values[-1]))
+    change = extrapolation_error(sizes, values, degree)
+    if math.isfinite(change):
+        own = change / abs(found.extrapolated) if found.extrapolated != 0 else math.inf
+        if own < finest:
+            return Answer("extrapolated", found.extrapolated, own,
+                          f"the extrapolated value: it changed by {100 * own:.3g} % when the "
+                          f"finest mesh was added, less than the finest value's estimated error "
+                          f"{100 * finest:.3g} %")
+        why = (f"the extrapolated value changed by {100 * own:.3g} % when the finest mesh was "
+               f"added, more than the finest value's estimated error {100 * finest:.3g} %")
+    else:
+        why = ("the extrapolated value has no estimate of its own (fewer than four meshes, or "
+               "a limit not from an asymptotic sequence)")
+    return Answer("finest", values[-1], finest, f"the finest mesh's value: {why}")
 
 
 def level_scene(scene: Scene, size: float) -> Scene:
@@ -60,10 +96,11 @@ Solve = Callable[[Scene, "dolfinx.fem.Function | None"],
 def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
                       ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Solve on finer meshes, each started from the previous velocity (``solve(level, previous)``:
-    run.solve_scene), until the estimated relative error of the scene's accuracy.quantity is below
-    accuracy.target, a level does not converge, or accuracy.max_levels are used. Returns the last
-    level's problem, iteration and summary, the summary with an ``accuracy`` table (whose value and
-    estimate are the last converged level's)."""
+    run.solve_scene), until the estimated relative error of the answer for the scene's
+    accuracy.quantity (choose_answer) is below accuracy.target, a level does not converge, or
+    accuracy.max_levels are used. Returns the last level's problem, iteration and summary, the
+    summary with an ``accuracy`` table (whose value and estimates are the last converged
+    level's)."""
     settings = scene.accuracy
     quantity, target = settings.quantity, settings.target
     start = time.perf_counter()
@@ -71,6 +108,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
     values: list[float] = []
     levels: list[dict[str, Any]] = []
     size, previous, found, error = first_mesh_size(scene), None, None, math.inf
+    answer = Answer("none", math.nan, math.inf, "fewer than three meshes: no estimate")
     while True:
         problem, result, summary = solve(level_scene(scene, size), previous)
         if sizes:  # the run says where it started
@@ -88,28 +126,38 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         if len(values) >= 3:
             found = estimate(sizes, values, scene.discretisation.degree)
             error = float(relative(found, values[-1]))
+            answer = choose_answer(sizes, values, found, scene.discretisation.degree)
         if comm.rank == 0:
             note = f", estimated error {100 * error:.3g} % ({found.kind.split(':')[0]})" if found \
                 else ""
+            if answer.kind == "extrapolated":
+                note += (f"; extrapolated {answer.value:.6g}, its estimated error "
+                         f"{100 * answer.estimate:.3g} %")
             log.info("accuracy level %d: h = %.4g, %d dofs, %s = %.6g, %d solves, %.1f s%s",
                      len(sizes), size, summary["dofs"], quantity, values[-1],
                      summary["linear_solves"], summary["wall_time_s"], note)
-        if error <= target:
-            reason = f"estimated error {100 * error:.3g} % <= target {100 * target:g} %"
+        if answer.estimate <= target:
+            reason = (f"estimated error of the {answer.kind} value {100 * answer.estimate:.3g} % "
+                      f"<= target {100 * target:g} %")
             break
         if len(levels) == settings.max_levels:
             reason = (f"target {100 * target:g} % not reached in accuracy.max_levels = "
-                      f"{settings.max_levels} meshes (estimated error {100 * error:.3g} %)")
+                      f"{settings.max_levels} meshes (estimated error {100 * answer.estimate:.3g} "
+                      "%)")
             break
-        size = next_mesh_size(size, found, error, target, settings.ratio)
-    reached = bool(summary["converged"] and error <= target)
+        size = next_mesh_size(size, found, error, target, settings.ratio, len(sizes))
+    reached = bool(summary["converged"] and answer.estimate <= target)
     summary["accuracy"] = {
         "target": target, "quantity": quantity, "reached": reached, "reason": reason,
+        "answer": answer.kind, "answer_value": answer.value, "answer_estimate": answer.estimate,
+        "answer_reason": answer.reason,
         "value": values[-1] if values else math.nan,
         "extrapolated": found.extrapolated if found else math.nan,
         "estimate": error, "estimate_absolute": found.error if found else math.nan,
         "observed_order": found.order if found else math.nan,
         "estimate_kind": found.kind if found else "none: fewer than three meshes",
+        "extrapolated_estimate": (extrapolation_error(sizes, values, scene.discretisation.degree)
+                                  / abs(found.extrapolated) if found else math.nan),
         "meshes": levels,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
     }
