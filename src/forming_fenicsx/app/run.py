@@ -45,17 +45,19 @@ log = logging.getLogger(__name__)
 
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
                 comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None,
-                restart: Path | None = None, previous: dolfinx.fem.Function | None = None
+                restart: Path | None = None, previous: dolfinx.fem.Function | None = None,
+                generate: Callable[[], None] | None = None
                 ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
     folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
-    mesh of the workpiece that starts it interpolated (transfer.py). Timed from when every rank has
-    entered (a rank still starting its interpreter is not the run's time)."""
+    mesh of the workpiece that starts it interpolated (transfer.py); ``generate`` meshes the
+    workpiece instead of the scene's blocks (an adapted mesh, mesh/adapted.py). Timed from when
+    every rank has entered (a rank still starting its interpreter is not the run's time)."""
     comm.barrier()
     start = time.perf_counter()
-    problem = coupled_problem(scene, build_mesh(scene, comm))
+    problem = coupled_problem(scene, build_mesh(scene, comm, generate))
     initial = None
     if restart is not None:
         initial = problem.u.copy()
@@ -185,15 +187,15 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                              "sequence of meshes, each started from the previous one: give one or "
                              "the other")
         problem, result, summary = solve_to_accuracy(
-            scene, lambda level, previous: solve_scene(level, petsc_options, comm, stop,
-                                                       previous=previous), comm)
+            scene, lambda level, previous, generate: solve_scene(
+                level, petsc_options, comm, stop, previous=previous, generate=generate), comm)
     save_velocity(out / "velocity.npz", problem.u)
     if scene.output.fields:
         write_fields(out / "fields.xdmf", problem.mesh, output_fields(problem))
     three_d = problem.coordinates.three_dimensional
     stresses = die_stresses(problem)
     profile = die_profile(problem, stresses)
-    heading = Heading.of_run(title or scene.process.kind, scene, summary)
+    heading = Heading.of_run(title or scene.process.kind, problem.scene, summary)  # finest mesh
     if scene.output.figures and three_d:
         faces, planes = die_faces(problem, stresses), symmetry_planes(problem)
         if comm.rank == 0:

@@ -356,13 +356,16 @@ class Accuracy:
     solved on meshes of sizes h_0 > h_1 > ..., each started from the previous solution, until the
     estimated relative error of ``quantity`` (default: ram_pressure, drawing_stress) is below the
     target or ``max_levels`` meshes are used. ``ratio`` is the refinement h_k/h_(k+1) of the first
-    levels; the scene's mesh size is the third level's. No target (the default): one run on the
+    levels; the scene's mesh size is the third level's. ``meshes``: "adapted" (after the first,
+    the meshes are adapted to an error indicator, mesh/adapted.py; a 2D scene's own geometry only)
+    or "refined" (the scene's blocks at a smaller size). No target (the default): one run on the
     scene's mesh."""
 
     target: float | None = None
     quantity: str | None = None
     ratio: float = 2.0
     max_levels: int = 6
+    meshes: str = "adapted"
 
     def check(self) -> None:
         if self.target is not None and not 0 < self.target < 1:
@@ -371,6 +374,9 @@ class Accuracy:
         if not 1.25 <= self.ratio <= 4:
             raise SceneError("accuracy.ratio",
                              f"must lie in [1.25, 4] (h_k/h_(k+1)); got {self.ratio}")
+        if self.meshes not in ("adapted", "refined"):
+            raise SceneError("accuracy.meshes", f'must be "adapted" or "refined"; got '
+                             f"{self.meshes!r}")
         if not 3 <= self.max_levels <= 12:
             raise SceneError("accuracy.max_levels", "must be an integer in [3, 12] (three meshes "
                              f"give the first estimate); got {self.max_levels}")

@@ -55,8 +55,10 @@ class Edge:
 
 def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
                 blocks: list[list[str]], groups: dict[str, list[str]],
-                arcs: dict[str, tuple[float, float]] | None = None) -> None:
-    """Add transfinite, recombined blocks to the current gmsh model.
+                arcs: dict[str, tuple[float, float]] | None = None,
+                structured: bool = True) -> None:
+    """Add transfinite, recombined blocks to the current gmsh model (not transfinite unless
+    ``structured``: the surfaces for a size field, mesh/adapted.py).
 
     A block is four edge names around it counter-clockwise; a leading '-' reverses an edge. An edge
     named in ``arcs`` is the circular arc about the centre given there, else a line.
@@ -70,13 +72,15 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
             tag = geo.addCircleArc(point_tags[edge.start], centre, point_tags[edge.end])
         else:
             tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
-        geo.mesh.setTransfiniteCurve(tag, edge.elements + 1, "Progression", edge.progression)
+        if structured:
+            geo.mesh.setTransfiniteCurve(tag, edge.elements + 1, "Progression", edge.progression)
         edge_tags[name] = tag
     surfaces = []
     for loop in blocks:
         signed = [-edge_tags[e[1:]] if e.startswith("-") else edge_tags[e] for e in loop]
         surface = geo.addPlaneSurface([geo.addCurveLoop(signed)])
-        geo.mesh.setTransfiniteSurface(surface)
+        if structured:
+            geo.mesh.setTransfiniteSurface(surface)
         geo.mesh.setRecombine(2, surface)
         surfaces.append(surface)
     geo.synchronize()
@@ -87,7 +91,7 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
         gmsh.model.setPhysicalName(1, ROLES[role], role)
 
 
-def _extrusion(scene: Scene) -> None:
+def _extrusion(scene: Scene, structured: bool = True) -> None:
     """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at
     (xd, h1)."""
     g, disc = scene.geometry, scene.discretisation
@@ -115,7 +119,7 @@ def _extrusion(scene: Scene) -> None:
     groups.setdefault("gamma4_free", []).append("exit_surface")
     groups["gamma3_contact"] = ["die_face", "container_wall"]
     groups["gamma6_symmetry"] = ["bottom_container", "bottom_exit"]
-    _add_blocks(points, edges, blocks, groups)
+    _add_blocks(points, edges, blocks, groups, structured=structured)
 
 
 def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
@@ -127,7 +131,7 @@ def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, lis
     return {"gamma1_velocity": list(driven), loaded: list(other)}
 
 
-def _profiled(scene: Scene) -> None:
+def _profiled(scene: Scene, structured: bool = True) -> None:
     """A workpiece through a profiled die (Example 2's strip, a drawn bar, a conical extrusion).
 
     Blocks along x: before the die [0, x0] (under a free surface for drawing, the container wall
@@ -161,7 +165,7 @@ def _profiled(scene: Scene) -> None:
     groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
     groups["gamma3_contact"] = wall
     groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
-    _add_blocks(points, edges, blocks, groups, arcs)
+    _add_blocks(points, edges, blocks, groups, arcs, structured)
 
 
 def _elements_along(segment, size: float) -> tuple[int, float]:
@@ -180,11 +184,15 @@ def _builder(scene: Scene):
     return _extrusion if getattr(g, "die", "") == "square" else _profiled
 
 
-def add_model(scene: Scene) -> None:
+def add_model(scene: Scene, structured: bool = True) -> None:
     """The scene's gmsh model in the current session: its blocks and physical groups, unmeshed
-    (mesh/slab.py extrudes a strip's)."""
+    (mesh/slab.py extrudes a strip's); in 2D without the blocks' transfinite constraints unless
+    ``structured`` (mesh/adapted.py meshes them by a size field)."""
     gmsh.model.add(scene.process.kind)
-    _builder(scene)(scene)
+    if structured:
+        _builder(scene)(scene)
+    else:
+        _builder(scene)(scene, structured=False)
 
 
 def mesh_model(dim: int, degree: int) -> None:

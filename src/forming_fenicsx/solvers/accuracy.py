@@ -15,9 +15,12 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import dolfinx.fem
+import numpy as np
 from mpi4py import MPI
 
 from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.fem.error_indicator import strain_rate_indicator
+from forming_fenicsx.mesh.adapted import adapted_sizes, size_field_mesh
 from forming_fenicsx.core.richardson import Estimate, estimate, extrapolation_error, relative
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.solvers.records import SolveResult
@@ -89,8 +92,35 @@ def first_mesh_size(scene: Scene) -> float:
     return min(scene.discretisation.mesh_size * scene.accuracy.ratio**2, scene.geometry.thinnest)
 
 
-Solve = Callable[[Scene, "dolfinx.fem.Function | None"],
+Solve = Callable[[Scene, "dolfinx.fem.Function | None", "Callable[[], None] | None"],
                  tuple[FlowProblem, SolveResult, dict[str, Any]]]
+
+
+def mesh_kind(scene: Scene) -> str:
+    """accuracy.meshes, "refined" where a mesh cannot be adapted: a 3D scene (hexahedra by a size
+    field are not gmsh's) or a user's mesh file (no geometry to re-mesh)."""
+    g = scene.geometry
+    return "refined" if g.three_dimensional or g.mesh_file else scene.accuracy.meshes
+
+
+def effective_size(comm: MPI.Comm, area: np.ndarray) -> float:
+    """The mesh size of an adapted mesh for Richardson's estimate: sqrt(area/cells), the size of
+    a uniform mesh with as many cells (the transfinite blocks' nominal size, too: their edges
+    take length/size elements)."""
+    total = comm.allreduce(float(area.sum()), op=MPI.SUM)
+    return math.sqrt(total / comm.allreduce(len(area), op=MPI.SUM))
+
+
+def adapted_mesh(comm: MPI.Comm, scene: Scene, indicator: tuple[np.ndarray, ...],
+                 growth: float) -> Callable[[], None] | None:
+    """The generator of the next level's mesh (mesh/adapted.py) on rank 0, ``growth`` times the
+    cells of this one (None on the other ranks, which build_mesh does not ask)."""
+    parts = comm.gather(indicator, root=0)
+    if comm.rank != 0:
+        return None
+    eta, area, corners = (np.concatenate(p) for p in zip(*parts, strict=True))
+    sizes = adapted_sizes(eta, np.sqrt(area), growth * len(area), scene.discretisation.degree)
+    return size_field_mesh(scene, corners, sizes)
 
 
 def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
@@ -109,11 +139,17 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
     levels: list[dict[str, Any]] = []
     size, previous, found, error = first_mesh_size(scene), None, None, math.inf
     answer = Answer("none", math.nan, math.inf, "fewer than three meshes: no estimate")
+    meshes, generate = mesh_kind(scene), None
     while True:
-        problem, result, summary = solve(level_scene(scene, size), previous)
+        problem, result, summary = solve(level_scene(scene, size), previous, generate)
         if sizes:  # the run says where it started
             summary["restarted_from"] = f"the velocity on mesh size {sizes[-1]:.6g}, interpolated"
         previous = problem.u
+        if meshes == "adapted":  # the level's size is the adapted mesh's, as it came out
+            indicator = strain_rate_indicator(problem)
+            size = effective_size(comm, indicator[1])
+            problem.scene.discretisation.mesh_size = size
+            summary["scene"]["discretisation"]["mesh_size"] = size
         level = {key: summary[key] for key in ("dofs", "linear_solves", "wall_time_s", quantity)}
         levels.append({"mesh_size": size, **level, "converged": summary["converged"],
                        "started_from": summary["restarted_from"]})
@@ -145,7 +181,10 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
                       f"{settings.max_levels} meshes (estimated error {100 * answer.estimate:.3g} "
                       "%)")
             break
-        size = next_mesh_size(size, found, error, target, settings.ratio, len(sizes))
+        finer = next_mesh_size(size, found, error, target, settings.ratio, len(sizes))
+        if meshes == "adapted":
+            generate = adapted_mesh(comm, scene, indicator, (size / finer) ** 2)
+        size = finer
     reached = bool(summary["converged"] and answer.estimate <= target)
     summary["accuracy"] = {
         "target": target, "quantity": quantity, "reached": reached, "reason": reason,
@@ -158,7 +197,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         "estimate_kind": found.kind if found else "none: fewer than three meshes",
         "extrapolated_estimate": (extrapolation_error(sizes, values, scene.discretisation.degree)
                                   / abs(found.extrapolated) if found else math.nan),
-        "meshes": levels,
+        "mesh_kind": meshes, "meshes": levels,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
     }
     return problem, result, summary
