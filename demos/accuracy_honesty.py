@@ -8,6 +8,7 @@ the estimate against the true error where an exact value is known, the wall time
 and the solves per level (--cold starts every level from the uniform modulus). With --radial, the
 estimator alone on the exact radial flows through a cone and a wedge (verification.radial_flow, Q2,
 4, 8, 16 and 32 cells across the angle).
+--meshes refined refines the scene's blocks instead of adapting the meshes (accuracy.meshes).
 Run: mpirun -n 2 .venv/bin/python demos/accuracy_honesty.py --radial
 """
 from __future__ import annotations
@@ -68,8 +69,9 @@ def judged(value: float, estimate: float, exact: float | None) -> list[str]:
             f"{estimate / true:.2f}" if exact and shown else ""]
 
 
-def case_rows(name: str, comm, repeat: int, cold: bool) -> list[list]:
+def case_rows(name: str, comm, repeat: int, cold: bool, meshes: str) -> list[list]:
     path, overrides, targets = CASES[name]
+    overrides = [*overrides, f"accuracy.meshes={meshes}"]
     rows = []
     for target in targets:
         scene = load_scene(DEMOS / path, [*NEWTON, *overrides, f"accuracy.target={target}"])
@@ -126,9 +128,12 @@ def main() -> None:
     parser.add_argument("--cold", action="store_true",
                         help="every level from the uniform-modulus start")
     parser.add_argument("--radial", action="store_true", help="also the exact radial flows")
+    parser.add_argument("--meshes", default="adapted", choices=("adapted", "refined"),
+                        help="accuracy.meshes of every sequence")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
-    rows = [row for name in args.cases for row in case_rows(name, comm, args.repeat, args.cold)]
+    rows = [row for name in args.cases
+            for row in case_rows(name, comm, args.repeat, args.cold, args.meshes)]
     header = ["case", "target", "meshes h", "final dofs", "finest value", "estimate",
               "true error", "estimate/true", "extrapolated", "its estimate", "its true error",
               "its estimate/true", "exact", "order", "answer", "reached", "solves per level",

@@ -240,10 +240,12 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                  summary["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]
-            log.info("accuracy: %s = %.6g (%s; finest %.6g, estimated error %.3g %%), estimated "
-                     "error %.3g %% (target %g %%) on %d meshes, %.1f s: %s",
-                     accuracy["quantity"], accuracy["answer_value"], accuracy["answer"],
-                     accuracy["value"], 100 * accuracy["estimate"],
+            which = ("finest mesh" if accuracy["answer"] != "extrapolated" else
+                     f"extrapolated; finest mesh {accuracy['value']:.6g}, estimated error "
+                     f"{100 * accuracy['estimate']:.3g} %")
+            log.info("accuracy: %s = %.6g (%s), estimated error %.3g %% (target %g %%) on %d %s "
+                     "meshes, %.1f s: %s", accuracy["quantity"], accuracy["answer_value"], which,
                      100 * accuracy["answer_estimate"], 100 * accuracy["target"],
-                     len(accuracy["meshes"]), accuracy["wall_time_s"], accuracy["reason"])
+                     len(accuracy["meshes"]), accuracy["mesh_kind"], accuracy["wall_time_s"],
+                     accuracy["reason"])
     return summary
