@@ -54,8 +54,8 @@ def cpu_seconds(comm, work):
 
 def sequence(scene, comm, cold: bool):
     """One --accuracy sequence: its summary (with the accuracy table)."""
-    return solve_to_accuracy(scene, lambda level, previous: solve_scene(
-        level, comm=comm, previous=None if cold else previous), comm)[2]
+    return solve_to_accuracy(scene, lambda level, previous, generate: solve_scene(
+        level, comm=comm, previous=None if cold else previous, generate=generate), comm)[2]
 
 
 def judged(value: float, estimate: float, exact: float | None) -> list[str]:
@@ -69,8 +69,10 @@ def judged(value: float, estimate: float, exact: float | None) -> list[str]:
             f"{estimate / true:.2f}" if exact and shown else ""]
 
 
-def case_rows(name: str, comm, repeat: int, cold: bool, meshes: str) -> list[list]:
-    path, overrides, targets = CASES[name]
+def case_rows(name: str, comm, repeat: int, cold: bool, meshes: str,
+              targets: list[float] | None = None) -> list[list]:
+    path, overrides, own = CASES[name]
+    targets = targets or own
     overrides = [*overrides, f"accuracy.meshes={meshes}"]
     rows = []
     for target in targets:
@@ -130,10 +132,12 @@ def main() -> None:
     parser.add_argument("--radial", action="store_true", help="also the exact radial flows")
     parser.add_argument("--meshes", default="adapted", choices=("adapted", "refined"),
                         help="accuracy.meshes of every sequence")
+    parser.add_argument("--targets", nargs="*", type=float,
+                        help="these targets for every case instead of each case's own")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     rows = [row for name in args.cases
-            for row in case_rows(name, comm, args.repeat, args.cold, args.meshes)]
+            for row in case_rows(name, comm, args.repeat, args.cold, args.meshes, args.targets)]
     header = ["case", "target", "meshes h", "final dofs", "finest value", "estimate",
               "true error", "estimate/true", "extrapolated", "its estimate", "its true error",
               "its estimate/true", "exact", "order", "answer", "reached", "solves per level",
