@@ -1,6 +1,6 @@
 """The iterative solver of the mixed formulation's saddle point (solver.linear = "iterative"): an
-augmented Lagrangian, a symmetric scaling, and FGMRES with a fieldsplit Schur preconditioner and
-algebraic multigrid on the velocity block.
+augmented Lagrangian, a symmetric scaling, and FGMRES with a fieldsplit Schur preconditioner and a
+two-level p-multigrid (Q2 -> Q1, p_multigrid.py) on the velocity block.
 
 The system
 
