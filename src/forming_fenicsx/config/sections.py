@@ -183,7 +183,7 @@ class Solver:
     rule of (4.4).
 
     ``linear``: how the linear systems are solved: "direct" (MUMPS), "iterative" (the mixed
-    formulation only: FGMRES with a fieldsplit Schur preconditioner and algebraic multigrid,
+    formulation only: FGMRES with a fieldsplit Schur preconditioner and p-multigrid on the velocity,
     fem/saddle_point.py; its relative residual follows the nonlinear iteration) or "auto" (iterative
     for a 3D mixed problem of at least solvers/linear.ITERATIVE_FROM unknowns, else direct).
     ``dual_start``: Newton's dual stress at the switch from the secant iterates, as a fraction of

@@ -63,6 +63,22 @@ def petsc_vec(u: dolfinx.fem.Function) -> PETSc.Vec:
     return u.vector if LEGACY else u.x.petsc_vec
 
 
+def interpolation_matrix(space0, space1) -> PETSc.Mat:
+    """The matrix of the interpolation from ``space0`` into ``space1`` (rows: space1's dofs,
+    unrolled), assembled: the C++ binding in 0.5, dolfinx.fem.petsc.interpolation_matrix from
+    0.8."""
+    if LEGACY:
+        from dolfinx.cpp.fem.petsc import interpolation_matrix as legacy
+
+        matrix = legacy(space0._cpp_object, space1._cpp_object)
+    else:
+        import dolfinx.fem.petsc
+
+        matrix = dolfinx.fem.petsc.interpolation_matrix(space0, space1)
+    matrix.assemble()  # 0.5 leaves it unassembled
+    return matrix
+
+
 def cell_geometry_nodes(mesh) -> np.ndarray:
     """Geometry node indices of every local cell, shape (cells, nodes per cell)."""
     dofmap = mesh.geometry.dofmap

@@ -1,6 +1,6 @@
 """The iterative solver of the mixed formulation's saddle point (solver.linear = "iterative"): an
-augmented Lagrangian, a symmetric scaling, and FGMRES with a fieldsplit Schur preconditioner and
-algebraic multigrid on the velocity block.
+augmented Lagrangian, a symmetric scaling, and FGMRES with a fieldsplit Schur preconditioner and a
+two-level p-multigrid (Q2 -> Q1, p_multigrid.py) on the velocity block.
 
 The system
 
@@ -20,10 +20,12 @@ S = diag(A_ii^-1/2) on the velocities and ((1 + gamma)/D_ii)^1/2 on the pressure
 residual then weighs every row alike (unscaled, the rows of the rigid zones, whose eta is up to the
 rate window's 1e6 times larger, decide it, and the pressure of the plastic zone is left far less
 accurate than the residual says). PETSc fieldsplit
-(Schur, upper factorisation) under the solver's options prefix: algebraic multigrid on the velocity
-block (GMRES to 1e-2 preconditioned by GAMG with the rigid-body near-null space: one
-V-cycle alone left the outer iteration 20 to 40 times longer), the Schur preconditioner (-1 on the
-scaled pressures), FGMRES outside.
+(Schur, upper factorisation) under the solver's options prefix: multigrid on the velocity block
+(GMRES to 1e-2 preconditioned by the two-level p-multigrid of p_multigrid.py, Q2 smoothed and Q1
+solved by GAMG; one V-cycle alone left the outer iteration far longer), the Schur preconditioner
+(-1 on the scaled pressures), FGMRES outside. ``fieldsplit_u_pc_type = "gamg"`` in
+solver.petsc_options puts GAMG on the Q2 block itself instead (with the rigid-body near-null
+space), the preconditioner before the p-multigrid.
 """
 from __future__ import annotations
 
@@ -35,6 +37,8 @@ import numpy as np
 import ufl
 from petsc4py import PETSc
 
+from forming_fenicsx.fem.p_multigrid import PMultigrid
+
 # the augmentation's weight (docs/iterative_solver.md: 10 needed fewer Krylov iterations than 1)
 GAMMA = 10.0
 # the options under the KSP's prefix (a scene's solver.petsc_options override any)
@@ -44,7 +48,10 @@ OPTIONS: dict[str, Any] = {
     "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur",
     "pc_fieldsplit_schur_fact_type": "upper", "pc_fieldsplit_schur_precondition": "user",
     "fieldsplit_u_ksp_type": "gmres", "fieldsplit_u_ksp_rtol": 1e-2, "fieldsplit_u_ksp_max_it": 50,
-    "fieldsplit_u_pc_type": "gamg", "fieldsplit_u_pc_gamg_threshold": 0.02,
+    # "mg": the velocity block's p-multigrid (p_multigrid.py; its levels' options under
+    # fieldsplit_u_mg_levels_ and fieldsplit_u_mg_coarse_); "gamg": GAMG on the Q2 block, with
+    # this graph threshold
+    "fieldsplit_u_pc_type": "mg", "fieldsplit_u_pc_gamg_threshold": 0.02,
     "fieldsplit_p_ksp_type": "preonly", "fieldsplit_p_pc_type": "jacobi"}
 
 
@@ -99,6 +106,11 @@ class AugmentedSaddlePoint:
         bs = space.dofmap.index_map_bs
         self.rows = PETSc.IS().createStride((end - start) * bs, start * bs, 1, comm=comm)
         self._modes = rigid_body_modes(velocity, order)
+        # what the p-multigrid needs: the velocity space, each owned dof's index in the system
+        system_index = np.empty_like(velocity_dofs)
+        system_index[order] = velocity_dofs
+        self._velocity_space = velocity, system_index, (start * bs, end * bs)
+        self.multigrid: PMultigrid | None = None  # the velocity block's (with pc_type "mg")
         self.modes: PETSc.NullSpace | None = None  # in the scaled unknowns (scale)
         self._ksp: PETSc.KSP | None = None
         self._scale: PETSc.Vec | None = None  # S
@@ -200,15 +212,28 @@ class AugmentedSaddlePoint:
         inverse.destroy()
 
     def configure(self, ksp: PETSc.KSP) -> None:
-        """The fieldsplit's two fields and its Schur preconditioner, once (after augment_matrix)."""
-        if self._ksp is not None:
-            return
+        """The fieldsplit's two fields and its Schur preconditioner, and the velocity block's
+        p-multigrid if its pc_type is "mg", once (after augment_matrix); the p-multigrid's operators
+        at every solve (after scale)."""
+        if self._ksp is None:
+            self._set_up(ksp)
+        elif self.multigrid is not None:
+            self.multigrid.update(ksp.getOperators()[0], self._scale)
+
+    def _set_up(self, ksp: PETSc.KSP) -> None:
         pc = ksp.getPC()
         pc.setFieldSplitIS(("u", self.velocity), ("p", self.pressure))
         pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)
-        ksp.setUp()
-        pc.getFieldSplitSubKSP()[0].setMonitor(self._count)
+        ksp.setUp()  # the fieldsplit's, not yet its blocks' preconditioners
+        block = pc.getFieldSplitSubKSP()[0]
+        block.setMonitor(self._count)
         self._ksp = ksp
+        if block.getPC().getType() == PETSc.PC.Type.MG:
+            velocity, system_index, rows = self._velocity_space
+            self.multigrid = PMultigrid(velocity, system_index, self.velocity, rows,
+                                        rigid_body_modes)
+            self.multigrid.update(ksp.getOperators()[0], self._scale)
+            self.multigrid.install(block.getPC())
 
     def _count(self, ksp: PETSc.KSP, iteration: int, residual: float) -> None:
         if iteration > 0:
@@ -216,6 +241,6 @@ class AugmentedSaddlePoint:
 
     def destroy(self) -> None:
         for item in (self._weight_matrix, self.schur, self._inverse, self._B, self.modes,
-                     self._scale, self.velocity, self.pressure, self.rows):
+                     self._scale, self.velocity, self.pressure, self.rows, self.multigrid):
             if item is not None:
                 item.destroy()
