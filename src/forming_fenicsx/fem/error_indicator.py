@@ -1,6 +1,6 @@
 """The error indicator that adapted meshes equidistribute (mesh/adapted.py): a recovered
-strain-rate estimate in the energy norm of the flow (Zienkiewicz and Zhu's, as Zienkiewicz, Liu
-and Huang used it for the flow formulation of forming, 1988),
+strain-rate estimate of each cell in the energy norm of the flow (Zienkiewicz and Zhu's, as
+Zienkiewicz, Liu and Huang used it for the flow formulation of forming, 1988).
 
     eta_K^2 = int_K G(u_h) |e* - e(u_h)|^2 dOmega,
 
