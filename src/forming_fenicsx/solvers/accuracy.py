@@ -148,8 +148,10 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         if meshes == "adapted":  # the level's size is the adapted mesh's, as it came out
             indicator = strain_rate_indicator(problem)
             size = effective_size(comm, indicator[1])
-            problem.scene.discretisation.mesh_size = size
-            summary["scene"]["discretisation"]["mesh_size"] = size
+            disc = problem.scene.discretisation
+            disc.mesh_size, disc.mesh_size_relative = size, size / scene.geometry.thinnest
+            summary["scene"]["discretisation"].update(
+                mesh_size=size, mesh_size_relative=disc.mesh_size_relative)
         level = {key: summary[key] for key in ("dofs", "linear_solves", "wall_time_s", quantity)}
         levels.append({"mesh_size": size, **level, "converged": summary["converged"],
                        "started_from": summary["restarted_from"]})
