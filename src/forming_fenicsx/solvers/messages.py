@@ -60,11 +60,12 @@ def linear_solve_failed(outer: int, inner: int, error: Exception) -> str:
             f"previous iterate{hint}")
 
 
-def newton_solve_failed(inner: int, error: Exception) -> str:
+def newton_solve_failed(failure: str, error: Exception) -> str:
+    """The reason of a run that ends where Newton's linear solve failed (``failure``:
+    newton_linear_failure's), with what to try unless the error names the linear solver."""
     hint = "" if "solver.linear" in str(error) else (
         ". Try a secant method or larger penalty parameters")
-    return (f"linear solve failed at Newton step {inner}: {error}; the results are the previous "
-            f"iterate{hint}")
+    return f"{failure}; the results are the previous iterate{hint}"
 
 
 def stop_requested(stop: str, outer: int, inner: int) -> str:

@@ -166,9 +166,9 @@ class NewtonSolver(SecantSolver):
         try:
             self.newton.solve_system(du)
         except LinearSolveError as error:
-            result.reason = messages.newton_solve_failed(inner, error)
             self._solve_failure = messages.newton_linear_failure(
                 inner, error, problem.scene, self.newton.saddle_point is not None)
+            result.reason = messages.newton_solve_failed(self._solve_failure, error)
             return math.nan
         result.linear_solves += 1
         # relative to u
