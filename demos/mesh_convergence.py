@@ -37,10 +37,13 @@ KINDS = {"uniform": ["discretisation.corner_grading=1", "accuracy.meshes=refined
          "adapted": ["accuracy.meshes=adapted"]}
 
 
-def rows_of(name: str, kind: str, comm) -> list[list]:
-    path, overrides, levels = CASES[name]
-    scene = load_scene(DEMOS / path, [*NEWTON, *overrides, *KINDS[kind],
-                                      f"accuracy.max_levels={levels}"])
+def rows_of(name: str, kind: str, comm, extra: tuple[str, ...] = (),
+            levels: int | None = None) -> list[list]:
+    """The case's sequence of ``kind`` (``extra`` overrides, ``levels`` meshes instead of its
+    own): a row per mesh."""
+    path, overrides, own = CASES[name]
+    scene = load_scene(DEMOS / path, [*NEWTON, *overrides, *KINDS[kind], *extra,
+                                      f"accuracy.max_levels={levels or own}"])
     accuracy = solve_to_accuracy(scene, lambda level, previous, generate: solve_scene(
         level, comm=comm, previous=previous, generate=generate), comm)[2]["accuracy"]
     exact = exact_value(scene, accuracy["quantity"])
