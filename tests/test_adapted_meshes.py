@@ -30,12 +30,14 @@ def test_the_indicator_vanishes_for_a_linear_velocity_and_sees_a_cubic_one():
     problem = _problem()
     problem.u.interpolate(lambda x: np.vstack([1 + 0.2 * x[0] - 0.1 * x[1], 0.05 * x[0]
                                                - 0.2 * x[1]]))
-    linear, area, corners = strain_rate_indicator(problem)
+    linear, area, corners, index = strain_rate_indicator(problem)
     g = SCENE.geometry
     whole = g.die_position * 0.5 * g.entry_thickness + \
         (g.length - g.die_position) * 0.5 * g.exit_thickness
     assert _total(area) == pytest.approx(whole, rel=1e-12)
     assert corners.shape == (len(area), 4, 2)
+    every = np.sort(np.concatenate(MPI.COMM_WORLD.allgather(index)))  # gmsh's order, each once
+    assert np.array_equal(every, np.arange(len(every)))
     problem.u.interpolate(lambda x: np.vstack([1 + 0.1 * x[1] ** 3, 0 * x[0]]))
     cubic = strain_rate_indicator(problem)[0]
     assert _total(np.abs(linear)) < 1e-12 * _total(cubic)
@@ -58,7 +60,7 @@ def test_a_size_field_mesh_is_all_quadrilaterals_finer_where_asked_with_every_ro
     mesh's cells there are about four times smaller, the die's side keeps its size; the facet
     roles are the scene's."""
     problem = _problem()
-    _, area, corners = strain_rate_indicator(problem)
+    _, area, corners, _ = strain_rate_indicator(problem)
     parts = MPI.COMM_WORLD.allgather((area, corners))
     area, corners = (np.concatenate(p) for p in zip(*parts))
     container = corners[:, :, 0].mean(axis=1) < SCENE.geometry.die_position
@@ -67,7 +69,7 @@ def test_a_size_field_mesh_is_all_quadrilaterals_finer_where_asked_with_every_ro
     assert adapted.mesh.topology.cell_type.name == "quadrilateral"
     assert set(adapted.facet_tags.values) | set() <= set(problem.roles.values())
     assert adapted.roles == problem.roles
-    new_area, new_corners = strain_rate_indicator(adapted)[1:]
+    new_area, new_corners = strain_rate_indicator(adapted)[1:3]
     inside = new_corners[:, :, 0].mean(axis=1) < SCENE.geometry.die_position
     mean_in = np.sqrt(_total(new_area[inside]) / MPI.COMM_WORLD.allreduce(int(inside.sum())))
     mean_out = np.sqrt(_total(new_area[~inside]) / MPI.COMM_WORLD.allreduce(int((~inside).sum())))

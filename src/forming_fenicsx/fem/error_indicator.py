@@ -18,7 +18,7 @@ import dolfinx.fem.petsc
 import numpy as np
 import ufl
 
-from forming_fenicsx.core.compat import cell_geometry_nodes, function_space
+from forming_fenicsx.core.compat import cell_geometry_nodes, function_space, original_cell_index
 from forming_fenicsx.fem.projection import LumpedProjector
 
 if TYPE_CHECKING:
@@ -27,9 +27,11 @@ if TYPE_CHECKING:
 RULE_ABOVE = 2  # the rule's degree over twice the element's
 
 
-def strain_rate_indicator(problem: FlowProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """eta_K^2 (module docstring), the cell areas and their corners (cells, 4, 2), in order around
-    each cell, for the owned cells of a 2D mesh (collective)."""
+def strain_rate_indicator(problem: FlowProblem
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """eta_K^2 (module docstring), the cell areas, their corners (cells, 4, 2) in order around each
+    cell and their indices in the cell list the mesh was made from, for the owned cells of a 2D
+    mesh (collective)."""
     mesh = problem.mesh
     owned = mesh.topology.index_map(mesh.topology.dim).size_local
     degree = problem.scene.discretisation.degree
@@ -49,4 +51,4 @@ def strain_rate_indicator(problem: FlowProblem) -> tuple[np.ndarray, np.ndarray,
     area = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(
         cell * ufl.dx(domain=mesh))).array[:owned].copy()
     corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned][:, [0, 1, 3, 2]]][:, :, :2]
-    return indicator, area, corners
+    return indicator, area, corners, original_cell_index(mesh)[:owned]

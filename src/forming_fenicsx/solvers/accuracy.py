@@ -114,11 +114,15 @@ def effective_size(comm: MPI.Comm, area: np.ndarray) -> float:
 def adapted_mesh(comm: MPI.Comm, scene: Scene, indicator: tuple[np.ndarray, ...],
                  growth: float) -> Callable[[], None] | None:
     """The generator of the next level's mesh (mesh/adapted.py) on rank 0, ``growth`` times the
-    cells of this one (None on the other ranks, which build_mesh does not ask)."""
+    cells of this one (None on the other ranks, which build_mesh does not ask). The cells go to
+    gmsh in the order this mesh was made from, whatever the partition: the same mesh on any
+    number of ranks."""
     parts = comm.gather(indicator, root=0)
     if comm.rank != 0:
         return None
-    eta, area, corners = (np.concatenate(p) for p in zip(*parts, strict=True))
+    eta, area, corners, index = (np.concatenate(p) for p in zip(*parts, strict=True))
+    order = np.argsort(index)
+    eta, area, corners = eta[order], area[order], corners[order]
     sizes = adapted_sizes(eta, np.sqrt(area), growth * len(area), scene.discretisation.degree)
     return size_field_mesh(scene, corners, sizes)
 
