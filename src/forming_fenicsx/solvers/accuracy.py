@@ -1,9 +1,10 @@
-"""Accuracy on demand: a scene solved on a sequence of finer meshes, each started from the previous
-solution interpolated onto it (transfer.py), until the estimated error of its answer is below a
-target. The answer is the finest mesh's value with Richardson's estimate (with its guards), or,
-from four meshes in the asymptotic range, the extrapolated value with the change of the
-extrapolation as its estimate, whichever estimate is smaller (core/richardson.py); docs/accuracy.md
-measures how both compare with the true error.
+"""Accuracy on demand: a scene solved on a sequence of finer meshes (adapted to a recovered
+strain-rate indicator, fem/error_indicator.py and mesh/adapted.py, or the scene's blocks refined),
+each started from the previous solution interpolated onto it (transfer.py), until the estimated
+error of its answer is below a target. The answer is the finest mesh's value with Richardson's
+estimate (with its guards), or, from four meshes in the asymptotic range, the extrapolated value
+with the change of the extrapolation as its estimate, whichever estimate is smaller
+(core/richardson.py); docs/accuracy.md measures how both compare with the true error.
 """
 from __future__ import annotations
 
@@ -129,12 +130,13 @@ def adapted_mesh(comm: MPI.Comm, scene: Scene, indicator: tuple[np.ndarray, ...]
 
 def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
                       ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
-    """Solve on finer meshes, each started from the previous velocity (``solve(level, previous)``:
-    run.solve_scene), until the estimated relative error of the answer for the scene's
-    accuracy.quantity (choose_answer) is below accuracy.target, a level does not converge, or
-    accuracy.max_levels are used. Returns the last level's problem, iteration and summary, the
-    summary with an ``accuracy`` table (whose value and estimates are the last converged
-    level's)."""
+    """Solve on finer meshes (adapted, mesh_kind), each started from the previous velocity
+    (``solve(level, previous, generate)``: run.solve_scene, ``generate`` the adapted mesh's
+    generator or None for the scene's blocks), until the estimated relative error of the answer for
+    the scene's accuracy.quantity (choose_answer) is below accuracy.target, a level does not
+    converge, or accuracy.max_levels are used. Returns the last level's problem, iteration and
+    summary, the summary with an ``accuracy`` table (whose value and estimates are the last
+    converged level's)."""
     settings = scene.accuracy
     quantity, target = settings.quantity, settings.target
     start = time.perf_counter()
