@@ -23,6 +23,8 @@ from forming_fenicsx.mesh.geometry import die_coordinate
 # a facet in contact at quadrature points of all but this fraction of its length is wholly in
 # contact
 FULL = 1e-9
+# a gap in the contact zone up to this fraction of its span is bridged (bridged_gaps)
+BRIDGED = 0.1
 # the facet integrals gathered per Gamma3 facet
 COLUMNS = ("length", "contact", "area", "area_contact", "cone", "cone_contact", "cone_pressure",
            "cone_contact_pressure")
@@ -81,18 +83,38 @@ def _facet_midpoints(problem, cells: np.ndarray) -> np.ndarray:
     return result
 
 
+def bridged_gaps(length: np.ndarray, touching: np.ndarray) -> np.ndarray:
+    """Facets out of contact between facets in contact on both sides, in runs no longer along the
+    die than BRIDGED times the zone's span (its first to its last facet in contact): where the
+    elements are much shorter than a polyline die's segments, the workpiece bears on the segments'
+    ends and lifts off whole facets between them (an adapted mesh on a CSV die: runs of one to
+    three facets under 0.2 mm segments; docs/outputs.md)."""
+    bridged = np.zeros(len(touching), dtype=bool)
+    where = np.flatnonzero(touching)
+    if len(where) < 2:
+        return bridged
+    span = length[where[0]:where[-1] + 1].sum()
+    gaps = np.flatnonzero(np.diff(where) > 1)
+    for first, last in zip(where[gaps] + 1, where[gaps + 1], strict=True):
+        if length[first:last].sum() <= BRIDGED * span:
+            bridged[first:last] = True
+    return bridged
+
+
 def whole_facets(length: np.ndarray, contact: np.ndarray) -> np.ndarray:
-    """The facets counted whole: those in contact at some quadrature point whose neighbours along
-    the die both are (inside the zone), and the zone's end facets whose neighbour inside it is in
-    contact at some of its points only (a zone whose points flicker does not tell where it ends
-    within a facet; next to a facet wholly in contact, the points do)."""
+    """The facets counted whole: those in contact at some quadrature point, or in a bridged gap
+    (bridged_gaps), whose neighbours along the die both are (inside the zone), and the zone's end
+    facets whose neighbour inside it is in contact at some of its points only (a zone whose points
+    flicker does not tell where it ends within a facet; next to a facet wholly in contact, the
+    points do)."""
     touching = contact > 0
+    zone = touching | bridged_gaps(length, touching)
     partial = touching & (contact < (1 - FULL) * length)
-    before = np.concatenate([[False], touching[:-1]])
-    after = np.concatenate([touching[1:], [False]])
+    before = np.concatenate([[False], zone[:-1]])
+    after = np.concatenate([zone[1:], [False]])
     partial_before = np.concatenate([[False], partial[:-1]])
     partial_after = np.concatenate([partial[1:], [False]])
-    inside = touching & before & after
+    inside = zone & before & after
     ends = touching & ((before & ~after & partial_before) | (after & ~before & partial_after))
     return inside | ends
 
