@@ -37,7 +37,7 @@ import numpy as np
 import ufl
 from petsc4py import PETSc
 
-from forming_fenicsx.fem.p_multigrid import PMultigrid
+from forming_fenicsx.fem.p_multigrid import PMultigrid, orthonormal_null_space
 
 # the augmentation's weight (docs/iterative_solver.md: 10 needed fewer Krylov iterations than 1)
 GAMMA = 10.0
@@ -183,18 +183,8 @@ class AugmentedSaddlePoint:
         """The near-null space of the scaled velocity block, S^-1 r for the rigid motions r,
         orthonormal: a new one each time (PETSc locks a null space's vectors), composed with the
         velocity field and set on the fieldsplit's velocity matrix once it exists."""
-        comm = velocity_scale.getComm()
-        vectors = []
-        for values in self._modes:
-            vector = velocity_scale.duplicate()
-            vector.array[:] = values / velocity_scale.array
-            for previous in vectors:  # Gram-Schmidt
-                vector.axpy(-vector.dot(previous), previous)
-            vector.normalize()
-            vectors.append(vector)
-        modes = PETSc.NullSpace().create(vectors=vectors, comm=comm)
-        for vector in vectors:  # the null space holds them
-            vector.destroy()
+        modes = orthonormal_null_space([values / velocity_scale.array for values in self._modes],
+                                       velocity_scale)
         self.velocity.compose("nearnullspace", modes)
         if self._ksp is not None:
             self._ksp.getPC().getFieldSplitSubKSP()[0].getOperators()[1].setNearNullSpace(modes)
