@@ -210,6 +210,31 @@ def cosine_die(path, segments: int) -> None:
     MPI.COMM_WORLD.barrier()
 
 
+def cosine_run(tmp, segments: int) -> tuple[dict, float, np.ndarray, np.ndarray]:
+    """The strip drawn through a cosine die of ``segments`` chords (law (4.5), mu 0.05, Newton):
+    its summary, the cone's length along the wall, and die.csv's s and contact pressure."""
+    path = tmp / f"cosine{segments}.csv"
+    cosine_die(path, segments)
+    scene = scene_from_dict({
+        "process": {"kind": "drawing", "velocity": 1.0},
+        "geometry": {"die_profile_file": str(path)},
+        "material": {"law": "piecewise_power", "A": 300.0}, "friction": {"mu": 0.05},
+        "discretisation": {"averaging": "quadrature"}, "solver": {"method": "newton"},
+        "output": {"fields": False, "figures": False}})
+    out = tmp / f"run{segments}"
+    summary = run_scene(scene, out)
+    slant = scene.geometry.profile().length - 0.4  # the cone's length along the wall
+    die = np.genfromtxt(out / "die.csv", delimiter=",", names=True)
+    return summary, slant, die["s"], die["contact_pressure"]
+
+
+def cone_mean(s: np.ndarray, pressure: np.ndarray, slant: float) -> float:
+    """die.csv's pressure integrated over the cone (trapezoidal) per the cone's length."""
+    within = s <= slant * (1 + 1e-9)
+    s, pressure = s[within], pressure[within]
+    return float(np.sum(np.diff(s) * 0.5 * (pressure[1:] + pressure[:-1])) / slant)
+
+
 @pytest.mark.parametrize("segments", [24, 96])
 def test_a_curved_csv_die_gets_the_contact_zone_and_pressure_of_its_die_csv(shared_tmp, segments):
     """Issue 34: a cosine die of 24 chords reported q_av 506 MPa over a contact length of 0.71 mm
@@ -220,26 +245,12 @@ def test_a_curved_csv_die_gets_the_contact_zone_and_pressure_of_its_die_csv(shar
     is die.csv's pressure integrated over that span per its length to 1 %, and 24 and 96 chords
     agree to 2 % (measured: 303.6 and 299.5 MPa over 1.1908 mm; the finer polygon is smoother,
     its drawing stress 1.8 % lower)."""
-    path = shared_tmp / f"cosine{segments}.csv"
-    cosine_die(path, segments)
-    scene = scene_from_dict({
-        "process": {"kind": "drawing", "velocity": 1.0},
-        "geometry": {"die_profile_file": str(path)},
-        "material": {"law": "piecewise_power", "A": 300.0}, "friction": {"mu": 0.05},
-        "discretisation": {"averaging": "quadrature"}, "solver": {"method": "newton"},
-        "output": {"fields": False, "figures": False}})
-    out = shared_tmp / f"run{segments}"
-    summary = run_scene(scene, out)
+    summary, slant, s, pressure = cosine_run(shared_tmp, segments)
     assert summary["converged"]
-    slant = scene.geometry.profile().length - 0.4  # the cone's length along the wall
-    die = np.genfromtxt(out / "die.csv", delimiter=",", names=True)
-    s, pressure = die["s"], die["contact_pressure"]
     pressed = s[pressure > 0]
     assert pressed.min() < 0.05 * slant and pressed.max() == pytest.approx(slant, rel=1e-3)
     assert summary["contact_length"] == pytest.approx(slant, rel=2e-3)
-    within = s <= slant * (1 + 1e-9)
-    integral = np.sum(np.diff(s[within]) * 0.5 * (pressure[within][1:] + pressure[within][:-1]))
-    assert summary["mean_die_pressure"] == pytest.approx(integral / slant, rel=0.01)
+    assert summary["mean_die_pressure"] == pytest.approx(cone_mean(s, pressure, slant), rel=0.01)
     assert summary["mean_die_pressure"] == pytest.approx(301.5, rel=0.02)
 
 
@@ -248,23 +259,9 @@ def test_a_coarse_csv_die_bridges_the_facets_between_its_chords(shared_tmp):
     ends and lifts off whole facets between them, which the quadrature points alone made a contact
     zone 28 % short with q_av 430.8 MPa; bridged (contact_zone.bridged_gaps), the contact length
     is the cone's and q_av is die.csv's pressure over it (measured 311.1 against 307.3 MPa)."""
-    path = shared_tmp / "cosine6.csv"
-    cosine_die(path, 6)
-    scene = scene_from_dict({
-        "process": {"kind": "drawing", "velocity": 1.0},
-        "geometry": {"die_profile_file": str(path)},
-        "material": {"law": "piecewise_power", "A": 300.0}, "friction": {"mu": 0.05},
-        "discretisation": {"averaging": "quadrature"}, "solver": {"method": "newton"},
-        "output": {"fields": False, "figures": False}})
-    out = shared_tmp / "run6"
-    summary = run_scene(scene, out)
-    slant = scene.geometry.profile().length - 0.4
-    die = np.genfromtxt(out / "die.csv", delimiter=",", names=True)
-    within = die["s"] <= slant * (1 + 1e-9)
-    s, pressure = die["s"][within], die["contact_pressure"][within]
-    integral = np.sum(np.diff(s) * 0.5 * (pressure[1:] + pressure[:-1]))
+    summary, slant, s, pressure = cosine_run(shared_tmp, 6)
     assert summary["converged"] and summary["contact_length"] == pytest.approx(slant, rel=2e-3)
-    assert summary["mean_die_pressure"] == pytest.approx(integral / slant, rel=0.02)
+    assert summary["mean_die_pressure"] == pytest.approx(cone_mean(s, pressure, slant), rel=0.02)
 
 
 def test_only_short_gaps_in_a_contact_zone_are_bridged():
