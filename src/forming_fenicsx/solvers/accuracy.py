@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 import dolfinx.fem
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from forming_fenicsx.config.scene import Scene
@@ -104,21 +105,23 @@ def mesh_kind(scene: Scene) -> str:
     return "refined" if g.three_dimensional or g.mesh_file else scene.accuracy.meshes
 
 
-def effective_size(comm: MPI.Comm, area: np.ndarray) -> float:
+def effective_size(problem: FlowProblem) -> float:
     """The mesh size of an adapted mesh for Richardson's estimate: sqrt(area/cells), the size of
     a uniform mesh with as many cells (the transfinite blocks' nominal size, too: their edges
     take length/size elements)."""
-    total = comm.allreduce(float(area.sum()), op=MPI.SUM)
-    return math.sqrt(total / comm.allreduce(len(area), op=MPI.SUM))
+    mesh, comm = problem.mesh, problem.comm
+    area = dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * ufl.dx(domain=mesh)))
+    cells = mesh.topology.index_map(mesh.topology.dim).size_global
+    return math.sqrt(comm.allreduce(area, op=MPI.SUM) / cells)
 
 
-def adapted_mesh(comm: MPI.Comm, scene: Scene, indicator: tuple[np.ndarray, ...],
-                 growth: float) -> Callable[[], None] | None:
-    """The generator of the next level's mesh (mesh/adapted.py) on rank 0, ``growth`` times the
-    cells of this one (None on the other ranks, which build_mesh does not ask). The cells go to
-    gmsh in the order this mesh was made from, whatever the partition: the same mesh on any
-    number of ranks."""
-    parts = comm.gather(indicator, root=0)
+def adapted_mesh(problem: FlowProblem, growth: float) -> Callable[[], None] | None:
+    """The generator of the next level's mesh (mesh/adapted.py), adapted to the strain-rate
+    indicator of ``problem``'s solution, on rank 0, ``growth`` times the cells of its mesh (None on
+    the other ranks, which build_mesh does not ask). The cells go to gmsh in the order this mesh
+    was made from, whatever the partition: the same mesh on any number of ranks."""
+    comm, scene = problem.comm, problem.scene
+    parts = comm.gather(strain_rate_indicator(problem), root=0)
     if comm.rank != 0:
         return None
     eta, area, corners, index = (np.concatenate(p) for p in zip(*parts, strict=True))
@@ -152,8 +155,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
             summary["restarted_from"] = f"the velocity on mesh size {sizes[-1]:.6g}, interpolated"
         previous = problem.u
         if meshes == "adapted":  # the level's size is the adapted mesh's, as it came out
-            indicator = strain_rate_indicator(problem)
-            size = effective_size(comm, indicator[1])
+            size = effective_size(problem)
             disc = problem.scene.discretisation
             disc.mesh_size, disc.mesh_size_relative = size, size / scene.geometry.thinnest
             summary["scene"]["discretisation"].update(
@@ -191,7 +193,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
             break
         finer = next_mesh_size(size, found, error, target, settings.ratio, len(sizes))
         if meshes == "adapted":
-            generate = adapted_mesh(comm, scene, indicator, (size / finer) ** 2)
+            generate = adapted_mesh(problem, (size / finer) ** 2)
         size = finer
     reached = bool(summary["converged"] and answer.estimate <= target)
     summary["accuracy"] = {
