@@ -119,6 +119,56 @@ def test_corner_grading_refines_toward_die_corner():
     assert sizes[1] < sizes[0] / 3
 
 
+def _drawing(wall: float, symmetry: str = "plane_strain", size: float = 0.1):
+    """Example 2's strip (or a wire, a quarter bar) meshed with corner_grading 1 and the given
+    wall_grading."""
+    geometry = {"symmetry": symmetry}
+    if symmetry == "3d":
+        geometry.update({"section": "rectangle", "entry_height": 2.0, "exit_height": 1.7,
+                         "entry_width": 3.0, "exit_width": 2.6, "die_angle": 8.0,
+                         "land_length": 0.3})
+    return build_mesh(make_scene(process={"kind": "drawing"}, geometry=geometry,
+                                 discretisation={"mesh_size": size, "corner_grading": 1.0,
+                                                 "wall_grading": wall}))
+
+
+def test_wall_grading_refines_toward_the_die_wall_and_its_corners():
+    """Example 2's die (a 6 degree cone from x = 3, a land from x = 4.34 to 4.49 at y = 0.672),
+    cells compared by their diagonals: with wall_grading 1 as large at the wall over the cone's
+    middle as at the axis under it (0.112); with 16 the cell at the die entry corner is a sixth of
+    the uniform one (0.022 against 0.135) and the thickness is graded: at the axis under the cone's
+    middle the cell is three times the one at the wall above it (0.242 against 0.076)."""
+    uniform, graded = _drawing(1.0), _drawing(16.0)
+    entry, wall, axis = np.array([3.0, 0.8125]), np.array([3.67, 0.743]), np.array([3.67, 0.0])
+    assert smallest_cell_near(uniform, wall) == pytest.approx(smallest_cell_near(uniform, axis),
+                                                              rel=1e-6)
+    assert smallest_cell_near(graded, entry) < smallest_cell_near(uniform, entry) / 5
+    assert smallest_cell_near(graded, wall) < smallest_cell_near(uniform, wall)
+    assert smallest_cell_near(graded, axis) > 3 * smallest_cell_near(graded, wall)
+
+
+def test_wall_grading_in_3d_refines_toward_the_die_faces():
+    """A quarter rectangular bar: with wall_grading 16 the hexahedra along the edge where the two
+    die faces meet are smaller than at the axis (uniform: alike), the volume the same."""
+    def extents(fm, point) -> float:
+        mesh = fm.mesh
+        owned = mesh.topology.index_map(3).size_local
+        corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned, :8]]
+        distance = np.linalg.norm(corners.mean(axis=1) - point, axis=1)
+        nearest = distance.argmin()
+        found = (distance[nearest], float(np.prod(np.ptp(corners[nearest], axis=0))))
+        return mesh.comm.allreduce(found, op=MPI.MIN)[1]
+
+    volumes = []
+    for wall in (1.0, 16.0):
+        fm = _drawing(wall, "3d", 0.25)
+        edge, axis = np.array([2.0, 0.9, 1.4]), np.array([2.0, 0.0, 0.0])
+        volumes.append(integrate(fm.mesh, dolfinx.fem.Constant(fm.mesh, 1.0) * ufl.dx))
+        ratio = extents(fm, axis) / extents(fm, edge)
+        assert (ratio == pytest.approx(1.0, rel=0.2)) if wall == 1.0 else ratio > 5
+    assert volumes[1] == pytest.approx(volumes[0], rel=1e-10)
+
+
 def test_msh_file_has_named_roles(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return

@@ -24,7 +24,6 @@ PROCESS_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
     "drawing": {
         "process": {"velocity": 1000.0, "drive": "pull"},
         "material": {"A": 100 * math.sqrt(3.0)},
-        "discretisation": {"corner_grading": 1.0},
     },
 }
 # The sections a scene may have (thermal only when it computes the temperature)

@@ -139,13 +139,15 @@ class Discretisation:
     """Element, incompressibility (penalty (3.5) with complete or reduced quadrature of the
     volumetric term, or a mixed velocity-pressure formulation: Q2 velocity with discontinuous P1
     pressure, the limit d -> 0 of Theorem 3.1), mesh size (absolute, or ``mesh_size_relative``
-    times the exit half-thickness) and grading toward the die corner."""
+    times the exit half-thickness) and the gradings toward the die's corners and wall (defaults:
+    the measured best, docs/accuracy.md)."""
 
     element: str = "Q2"
     volumetric_integration: str = "reduced"
     mesh_size: float | None = None
     mesh_size_relative: float | None = None
-    corner_grading: float = 4.0
+    corner_grading: float = 64.0
+    wall_grading: float = 16.0
     averaging: str = "nodes"
     formulation: str = "penalty"
 
@@ -161,10 +163,12 @@ class Discretisation:
                 raise SceneError(f"discretisation.{key}",
                                  f"must be one of {', '.join(allowed)}; got {getattr(self, key)!r}")
         check_positive("discretisation.mesh_size", self.mesh_size)
-        if not 1 <= self.corner_grading <= 1e3:
-            raise SceneError("discretisation.corner_grading",
-                             "must lie in [1, 1000] (ratio of the largest to the smallest element "
-                             f"on a graded edge; 1 is uniform); got {self.corner_grading}")
+        for key in ("corner_grading", "wall_grading"):
+            if not 1 <= getattr(self, key) <= 1e3:
+                raise SceneError(f"discretisation.{key}",
+                                 "must lie in [1, 1000] (ratio of the largest to the smallest "
+                                 f"element on a graded edge; 1 is uniform); got "
+                                 f"{getattr(self, key)}")
 
     @property
     def degree(self) -> int:

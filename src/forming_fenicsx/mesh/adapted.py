@@ -42,12 +42,17 @@ def adapted_sizes(indicator: np.ndarray, sizes: np.ndarray, cells: float,
     return new(np.sqrt(low * high))
 
 
-def size_field_mesh(scene: Scene, corners: np.ndarray, sizes: np.ndarray) -> Callable[[], None]:
-    """A generator for mesh/geometry.build_mesh: the scene's 2D workpiece meshed with the size
+def size_field_mesh(scene: Scene, corners: np.ndarray, sizes: np.ndarray,
+                    add: Callable[[], None] | None = None) -> Callable[[], None]:
+    """A generator for mesh/geometry.build_mesh: the scene's 2D workpiece (or the unmeshed model
+    that ``add`` puts in the session, e.g. a verification's own domain) meshed with the size
     ``sizes[K]`` over the quadrilateral ``corners[K]`` (cells, 4, 2; in order around it), in the
-    current gmsh session (rank 0)."""
+    current gmsh session (rank 0), with the scene's element degree."""
     def generate() -> None:
-        add_model(scene, structured=False)
+        if add is None:
+            add_model(scene, structured=False)
+        else:
+            add()
         view = gmsh.view.add("size")
         z = np.zeros(corners.shape[:2])
         values = np.repeat(SUBDIVISION * sizes[:, None], 4, axis=1)

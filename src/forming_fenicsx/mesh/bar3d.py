@@ -90,25 +90,41 @@ class HexBlocks:
 
 def stations(scene: Scene) -> list[tuple[float, float, float]]:
     """(x, half-height, half-width) at the ends of the axis' stretches: the entry face, the die
-    entry, the land, the die exit, the exit face (a round bar: half-width = radius)."""
+    entry, the land, the die exit, the exit face (a round bar: half-width = radius); with
+    wall_grading > 1 also the middles of the converging stretch and of the land, where the
+    stretches graded toward the die's corners meet (_axial)."""
     g = scene.geometry
     h0, h1 = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness
     w0, w1 = ((h0, h1) if g.shape == "round" else (0.5 * g.entry_width, 0.5 * g.exit_width))
     land = g.die_entry + g.cone_length
-    return [(0.0, h0, w0), (g.die_entry, h0, w0), (land, h1, w1), (g.die_exit, h1, w1),
-            (g.length, h1, w1)]
+    at = [(0.0, h0, w0), (g.die_entry, h0, w0), (land, h1, w1), (g.die_exit, h1, w1),
+          (g.length, h1, w1)]
+    if scene.discretisation.wall_grading == 1.0:
+        return at
+    middles = [tuple(0.5 * (a + b) for a, b in zip(at[k], at[k + 1], strict=True)) for k in (1, 2)]
+    return [at[0], at[1], middles[0], at[2], middles[1], at[3], at[4]]
 
 
 def _axial(scene: Scene, x: list[float]) -> list[tuple[int, float]]:
     """Elements and progression of each stretch of the axis: graded toward the die's ends in the
-    stock and the product (discretisation.corner_grading), uniform in the die."""
+    stock and the product (discretisation.corner_grading); in the die uniform, or with
+    wall_grading > 1 its halves graded toward the corner each holds (stations)."""
     disc, count = scene.discretisation, len(x) - 1
     counts = []
     for k in range(count):
-        grading = disc.corner_grading if k in (0, count - 1) else 1.0
-        counts.append(graded_edge(x[k + 1] - x[k], disc.mesh_size, grading,
-                                  toward_end=(k == 0)))
+        if k in (0, count - 1):
+            grading, toward_end = disc.corner_grading, k == 0
+        else:  # the die: halves alternate, from a corner to a middle and back
+            grading, toward_end = disc.wall_grading, k % 2 == 0
+        counts.append(graded_edge(x[k + 1] - x[k], disc.mesh_size, grading, toward_end))
     return counts
+
+
+def _across(length: float, scene: Scene) -> tuple[int, float]:
+    """Elements and progression of a line across the section toward the die wall
+    (discretisation.wall_grading)."""
+    disc = scene.discretisation
+    return graded_edge(length, disc.mesh_size, disc.wall_grading, toward_end=True)
 
 
 def _roles_along(scene: Scene, stretches: int) -> list[str]:
@@ -130,17 +146,18 @@ def _end_roles(scene: Scene) -> tuple[str, str]:
 def rectangular_bar(scene: Scene) -> None:
     """The quarter of a rectangular bar: a block per stretch of the axis, its corners at
     (x, 0, 0), (x, h, 0), (x, h, w), (x, 0, w)."""
-    size = scene.discretisation.mesh_size
     at = stations(scene)
     blocks = HexBlocks()
-    n_y = max(1, math.ceil(at[0][1] / size - 1e-9))
-    n_z = max(1, math.ceil(at[0][2] / size - 1e-9))
+    (n_y, r_y), (n_z, r_z) = _across(at[0][1], scene), _across(at[0][2], scene)
     sections = [[blocks.point(x, 0.0, 0.0), blocks.point(x, h, 0.0), blocks.point(x, h, w),
                  blocks.point(x, 0.0, w)] for x, h, w in at]
+    # around the section from the axis: up to the top, along it to the side, down, back: each
+    # refined toward the wall (y = h, then z = w)
+    lines = ((n_y, r_y), (n_z, r_z), (n_y, 1.0 / r_y), (n_z, 1.0 / r_z))
     for corners in sections:
-        for (a, b), n in zip(zip(corners, [*corners[1:], corners[0]]), (n_y, n_z, n_y, n_z),
-                             strict=True):
-            blocks.line(a, b, n)
+        for (a, b), (n, ratio) in zip(zip(corners, [*corners[1:], corners[0]]), lines,
+                                      strict=True):
+            blocks.line(a, b, n, ratio)
     for (n_x, ratio), low, high in zip(_axial(scene, [s[0] for s in at]), sections[:-1],
                                        sections[1:],
                                        strict=True):
@@ -167,7 +184,7 @@ def round_bar(scene: Scene) -> None:
     blocks = HexBlocks()
     radius0 = at[0][1]
     n_core = max(1, math.ceil(CORE * radius0 / size - 1e-9))
-    n_ring = max(1, math.ceil((1 - CORE) * radius0 / size - 1e-9))
+    n_ring, r_ring = _across((1 - CORE) * radius0, scene)
     sections = []
     for x, radius, _ in at:
         core, diagonal = CORE * radius, radius / math.sqrt(2.0)
@@ -175,10 +192,11 @@ def round_bar(scene: Scene) -> None:
                  "ry": (radius, 0.0), "rd": (diagonal, diagonal), "rz": (0.0, radius)}
         section = {k: blocks.point(x, y, z) for k, (y, z) in names.items()}
         centre = blocks.point(x, 0.0, 0.0)
-        for a, b, n in (("o", "cy", n_core), ("cy", "cc", n_core), ("cc", "cz", n_core),
-                        ("cz", "o", n_core), ("cy", "ry", n_ring), ("cc", "rd", n_ring),
-                        ("cz", "rz", n_ring)):
-            blocks.line(section[a], section[b], n)
+        for a, b, n, ratio in (("o", "cy", n_core, 1.0), ("cy", "cc", n_core, 1.0),
+                               ("cc", "cz", n_core, 1.0), ("cz", "o", n_core, 1.0),
+                               ("cy", "ry", n_ring, r_ring), ("cc", "rd", n_ring, r_ring),
+                               ("cz", "rz", n_ring, r_ring)):
+            blocks.line(section[a], section[b], n, ratio)
         blocks.line(section["ry"], section["rd"], n_core, centre=centre)
         blocks.line(section["rd"], section["rz"], n_core, centre=centre)
         sections.append(section)

@@ -5,7 +5,6 @@ by config/mesh_file.py.
 """
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -18,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.config.die_profile import Segment
 from forming_fenicsx.config.mesh_file import gmsh_session, open_msh
 from forming_fenicsx.core.roles import ROLES, WORKPIECE
 from forming_fenicsx.config.scene import Scene
@@ -136,24 +136,27 @@ def _profiled(scene: Scene, structured: bool = True) -> None:
 
     Blocks along x: before the die [0, x0] (under a free surface for drawing, the container wall
     for extrusion), one block under each segment of the die wall (lines, and arcs that Q2 follows),
-    then the product [x_n, L], with the same number of elements through the thickness; the ends of
-    the first and last blocks are graded toward the die entry and exit.
+    then the product [x_n, L], with the same number of elements through the thickness. The ends of
+    the first and last blocks are graded toward the die entry and exit (corner_grading); with
+    wall_grading > 1 each die segment is two blocks graded toward its ends (the corners where the
+    wall's slope changes) and the thickness is graded toward the die wall.
     """
     g, disc = scene.geometry, scene.discretisation
     h0, h1, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.length
     size, grade = disc.mesh_size, disc.corner_grading
-    segments = g.profile().segments
-    n_y = max(1, math.ceil(h0 / size - 1e-9))
-    tops = [(0.0, h0), *(seg.start for seg in segments), segments[-1].end, (L, h1)]
+    pieces = _wall_pieces(g.profile().segments, size, disc.wall_grading)
+    n_y, r_y = graded_edge(h0, size, disc.wall_grading, toward_end=True)
+    tops = [(0.0, h0), *(piece.start for piece, _ in pieces), pieces[-1][0].end, (L, h1)]
     n_in, r_in = graded_edge(tops[1][0], size, grade, toward_end=True)
     n_out, r_out = graded_edge(L - tops[-2][0], size, grade, toward_end=False)
-    counts = [(n_in, r_in)] + [_elements_along(seg, size) for seg in segments] + [(n_out, r_out)]
+    counts = [(n_in, r_in)] + [count for _, count in pieces] + [(n_out, r_out)]
     points = {f"b{i}": (x, 0.0) for i, (x, _) in enumerate(tops)}
     points.update({f"t{i}": top for i, top in enumerate(tops)})
     edges = {f"bottom{i}": Edge(f"b{i}", f"b{i + 1}", *counts[i]) for i in range(len(tops) - 1)}
-    edges.update({f"line{i}": Edge(f"b{i}", f"t{i}", n_y) for i in range(len(tops))})
+    edges.update({f"line{i}": Edge(f"b{i}", f"t{i}", n_y, r_y) for i in range(len(tops))})
     edges.update({f"top{i}": Edge(f"t{i}", f"t{i + 1}", *counts[i]) for i in range(len(tops) - 1)})
-    arcs = {f"top{i + 1}": seg.centre for i, seg in enumerate(segments) if seg.centre is not None}
+    arcs = {f"top{i + 1}": piece.centre for i, (piece, _) in enumerate(pieces)
+            if piece.centre is not None}
     blocks = [[f"bottom{i}", f"line{i + 1}", f"-top{i}", f"-line{i}"] for i in range(len(tops) - 1)]
     last = len(tops) - 1
     groups = _end_faces(scene, ["line0"], [f"line{last}"])
@@ -168,11 +171,24 @@ def _profiled(scene: Scene, structured: bool = True) -> None:
     _add_blocks(points, edges, blocks, groups, arcs, structured)
 
 
-def _elements_along(segment, size: float) -> tuple[int, float]:
-    """Elements under a die segment: by its axial extent for a line (as Example 2's cone and land),
-    by its length for an arc; uniform."""
-    extent = segment.end[0] - segment.start[0] if segment.centre is None else segment.length
-    return graded_edge(extent, size, 1.0, toward_end=True)
+def _wall_pieces(segments: list[Segment], size: float, grading: float
+                 ) -> list[tuple[Segment, tuple[int, float]]]:
+    """The die wall's blocks with their elements and progressions: each segment whole and uniform
+    (``grading`` 1), else its two halves, each graded toward the segment's end it holds. Elements
+    by the axial extent of a line (as Example 2's cone and land), by the length of an arc."""
+    def extent(segment: Segment) -> float:
+        return (segment.end[0] - segment.start[0] if segment.centre is None
+                else segment.length)
+
+    if grading == 1.0:
+        return [(seg, graded_edge(extent(seg), size, 1.0, toward_end=True)) for seg in segments]
+    pieces = []
+    for seg in segments:
+        middle = tuple(float(c) for c in seg.points(2)[1])
+        for half, toward_end in ((Segment(seg.start, middle, seg.centre), False),
+                                 (Segment(middle, seg.end, seg.centre), True)):
+            pieces.append((half, graded_edge(extent(half), size, grading, toward_end)))
+    return pieces
 
 
 def _builder(scene: Scene):

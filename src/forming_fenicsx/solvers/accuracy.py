@@ -115,11 +115,13 @@ def effective_size(problem: FlowProblem) -> float:
     return math.sqrt(comm.allreduce(area, op=MPI.SUM) / cells)
 
 
-def adapted_mesh(problem: FlowProblem, growth: float) -> Callable[[], None] | None:
+def adapted_mesh(problem: FlowProblem, growth: float, add: Callable[[], None] | None = None
+                 ) -> Callable[[], None] | None:
     """The generator of the next level's mesh (mesh/adapted.py), adapted to the strain-rate
     indicator of ``problem``'s solution, on rank 0, ``growth`` times the cells of its mesh (None on
-    the other ranks, which build_mesh does not ask). The cells go to gmsh in the order this mesh
-    was made from, whatever the partition: the same mesh on any number of ranks."""
+    the other ranks, which build_mesh does not ask); the scene's blocks, or the unmeshed model that
+    ``add`` makes. The cells go to gmsh in the order this mesh was made from, whatever the
+    partition: the same mesh on any number of ranks."""
     comm, scene = problem.comm, problem.scene
     parts = comm.gather(strain_rate_indicator(problem), root=0)
     if comm.rank != 0:
@@ -128,7 +130,7 @@ def adapted_mesh(problem: FlowProblem, growth: float) -> Callable[[], None] | No
     order = np.argsort(index)
     eta, area, corners = eta[order], area[order], corners[order]
     sizes = adapted_sizes(eta, np.sqrt(area), growth * len(area), scene.discretisation.degree)
-    return size_field_mesh(scene, corners, sizes)
+    return size_field_mesh(scene, corners, sizes, add)
 
 
 def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD

@@ -45,6 +45,10 @@ from forming_fenicsx.solvers.secant import SecantSolver
 log = logging.getLogger(__package__)  # the solvers' one logger (app/cli.py sets its level)
 
 ROUNDING = 1e-12    # a relative Newton step below this is rounding
+# a full step whose predicted decrease F.du is below this times |Phi| changes Phi by its rounding
+# (measured: differences of 1e-16 of Phi = 0.15 for slopes of 1e-21): the line search cannot judge
+# it, and halving it only stalls the iteration
+ENERGY_ROUNDING = 1e-13
 # with the strain in the tangent a run stops only once the x forces balance to this (unless
 # solver.force_tolerance is set): the increment can meet delta while the penalty pressure is still
 # far out of balance (docs/hardening.md)
@@ -229,8 +233,11 @@ class NewtonSolver(SecantSolver):
         Phi along -du often lies beyond the full step, since while the dual stress differs from
         tau(u) the operator is stiffer than the consistent tangent along the flow direction
         (docs/solvers.md). Otherwise the step is halved until it lowers Phi by ARMIJO * s * F.du and
-        then moved towards the minimum of Phi along -du (_refine)."""
+        then moved towards the minimum of Phi along -du (_refine). A full step too small for Phi
+        to tell (ENERGY_ROUNDING) is taken."""
         step, energy = 1.0, self._energy_at(1.0)
+        if abs(slope) < ENERGY_ROUNDING * abs(energy0):
+            return step
         energies = {0.0: energy0, step: energy}
         for _ in range(MAX_HALVINGS):
             if energy <= energy0 - ARMIJO * step * slope:

@@ -5,6 +5,8 @@ body force here), u(y) = n/(n+1) (G/K)^(1/n) [h^(1+1/n) - |y|^(1+1/n)] with K = 
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import dolfinx.fem
 import dolfinx.mesh
 import numpy as np
@@ -19,6 +21,7 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
 from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.solvers.choice import solver_for
+from forming_fenicsx.solvers.records import SolveResult
 from forming_fenicsx.solvers.secant import SecantSolver
 
 LENGTH, HALF_HEIGHT, GRADIENT, A = 2.0, 1.0, 1.0, 1.0
@@ -111,41 +114,61 @@ def radial_stress_rise(symmetry: str, n: float) -> float:
                                    symmetry)
 
 
-def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD) -> FormingMesh:
-    """The sector rho1 < rho < rho0, 0 < theta < alpha in Gmsh (isoparametric Q_degree, ``cells``
-    elements across the angle, as many along rho): exit cap gamma1 (its velocity prescribed by the
-    caller), entry cap gamma2 (free), wall gamma3 (die), axis gamma6."""
+def add_sector(cells: int, grading: float = 1.0, structured: bool = True) -> None:
+    """The sector rho1 < rho < rho0, 0 < theta < alpha in the current gmsh session, unmeshed:
+    exit cap gamma1 (its velocity prescribed by the caller), entry cap gamma2 (free), wall gamma3
+    (die), axis gamma6. ``structured``: a transfinite block of ``cells`` elements across the angle
+    and as many along rho, graded toward the exit cap by ``grading`` (largest/smallest element,
+    where the strain rate 2U/rho^3 peaks); else the bare surface for a size field
+    (mesh/adapted.py)."""
     import gmsh
 
-    from forming_fenicsx.config.mesh_file import gmsh_session
     from forming_fenicsx.core.roles import ROLES, WORKPIECE
+    from forming_fenicsx.mesh.grading import graded_edge
 
     alpha = np.radians(RADIAL["alpha"])
     rho0, rho1 = RADIAL["rho0"], RADIAL["rho1"]
+    geo = gmsh.model.geo
+    centre = geo.addPoint(0, 0, 0)
+    corners = [geo.addPoint(-r * np.cos(t), r * np.sin(t), 0)
+               for r, t in ((rho0, 0), (rho1, 0), (rho1, alpha), (rho0, alpha))]
+    axis = geo.addLine(corners[0], corners[1])
+    exit_cap = geo.addCircleArc(corners[1], centre, corners[2])
+    wall = geo.addLine(corners[2], corners[3])
+    entry_cap = geo.addCircleArc(corners[3], centre, corners[0])
+    surface = geo.addPlaneSurface([geo.addCurveLoop([axis, exit_cap, wall, entry_cap])])
+    if structured:
+        along = max(1, round(cells * (rho0 - rho1) / (rho1 * alpha)))
+        _, ratio = graded_edge(rho0 - rho1, (rho0 - rho1) / along, grading, toward_end=True)
+        for curve, count, progression in ((axis, along, ratio), (wall, along, 1.0 / ratio),
+                                          (exit_cap, cells, 1.0), (entry_cap, cells, 1.0)):
+            geo.mesh.setTransfiniteCurve(curve, count + 1, "Progression", progression)
+        geo.mesh.setTransfiniteSurface(surface)
+    geo.mesh.setRecombine(2, surface)
+    geo.synchronize()
+    gmsh.model.addPhysicalGroup(2, [surface], WORKPIECE)
+    for curve, role in ((exit_cap, "gamma1_velocity"), (entry_cap, "gamma2_free"),
+                        (wall, "gamma3_contact"), (axis, "gamma6_symmetry")):
+        gmsh.model.addPhysicalGroup(1, [curve], ROLES[role])
+
+
+def sector_mesh(cells: int, degree: int, comm: MPI.Comm = MPI.COMM_WORLD, grading: float = 1.0,
+                generate: Callable[[], None] | None = None) -> FormingMesh:
+    """The sector of add_sector meshed in Gmsh (isoparametric Q_degree), or by ``generate`` on
+    rank 0 (an adapted mesh of it, solvers/accuracy.adapted_mesh)."""
+    import gmsh
+
+    from forming_fenicsx.config.mesh_file import gmsh_session
+    from forming_fenicsx.core.roles import ROLES
+    from forming_fenicsx.mesh.geometry import mesh_model
+
     with gmsh_session():
         if comm.rank == 0:
-            geo = gmsh.model.geo
-            centre = geo.addPoint(0, 0, 0)
-            corners = [geo.addPoint(-r * np.cos(t), r * np.sin(t), 0)
-                       for r, t in ((rho0, 0), (rho1, 0), (rho1, alpha), (rho0, alpha))]
-            axis = geo.addLine(corners[0], corners[1])
-            exit_cap = geo.addCircleArc(corners[1], centre, corners[2])
-            wall = geo.addLine(corners[2], corners[3])
-            entry_cap = geo.addCircleArc(corners[3], centre, corners[0])
-            surface = geo.addPlaneSurface([geo.addCurveLoop([axis, exit_cap, wall, entry_cap])])
-            along = max(1, round(cells * (rho0 - rho1) / (rho1 * alpha)))
-            for curve, count in ((axis, along), (wall, along), (exit_cap, cells),
-                                 (entry_cap, cells)):
-                geo.mesh.setTransfiniteCurve(curve, count + 1)
-            geo.mesh.setTransfiniteSurface(surface)
-            geo.mesh.setRecombine(2, surface)
-            geo.synchronize()
-            gmsh.model.addPhysicalGroup(2, [surface], WORKPIECE)
-            for curve, role in ((exit_cap, "gamma1_velocity"), (entry_cap, "gamma2_free"),
-                                (wall, "gamma3_contact"), (axis, "gamma6_symmetry")):
-                gmsh.model.addPhysicalGroup(1, [curve], ROLES[role])
-            gmsh.model.mesh.generate(2)
-            gmsh.model.mesh.setOrder(degree)
+            if generate is None:
+                add_sector(cells, grading)
+                mesh_model(2, degree)
+            else:
+                generate()
         mesh, _, facet_tags = mesh_from_gmsh(gmsh.model, comm, 0, gdim=2)
     roles = {role: ROLES[role]
              for role in ("gamma1_velocity", "gamma2_free", "gamma3_contact", "gamma6_symmetry")}
@@ -171,12 +194,14 @@ def radial_hardening_stress_rise(symmetry: str, law, points: int = 200) -> float
 
 def radial_problem(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
                    comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
-                   tolerance: float = 1e-8) -> FlowProblem:
+                   tolerance: float = 1e-8, forming_mesh: FormingMesh | None = None
+                   ) -> FlowProblem:
     """Drawing through the smooth cone or wedge, to be solved by ``method``: the exit cap pulled at
     the exact velocity, the entry cap free (the exact sigma_rr is taken zero there), the wall a
     frictionless die, the Norton law sigma = K rate^n (or the scene ``material`` given, e.g. a
-    hardening law, whose strain is then transported and coupled)."""
-    forming_mesh = sector_mesh(cells, int(element[1]), comm)
+    hardening law, whose strain is then transported and coupled); on the uniform sector_mesh of
+    ``cells``, or on ``forming_mesh`` (a sector_mesh graded or adapted)."""
+    forming_mesh = forming_mesh or sector_mesh(cells, int(element[1]), comm)
     scene = scene_from_dict({
         "process": {"kind": "drawing", "velocity": RADIAL["U"]},
         "output": {"fields": False, "figures": False},
@@ -202,22 +227,35 @@ def radial_problem(symmetry: str, n: float, element: str, cells: int, method: st
 def radial_flow(symmetry: str, n: float, element: str, cells: int, method: str = "newton",
                 comm: MPI.Comm = MPI.COMM_WORLD, material: dict | None = None,
                 tolerance: float = 1e-8) -> dict[str, float]:
-    """The radial_problem solved by ``method``. Returns the L2 and H1-seminorm velocity errors
-    (relative to the exact field's norms) and the mean axial stress on the exit cap, F / (pi rho1^2
-    sin^2 alpha) (cone) or F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1)
-    (radial_stress_rise, or radial_hardening_stress_rise), and with a hardening law the mean exit
-    strain beside the exact eps0 + ln(A0/A1)."""
-    from forming_fenicsx.post.flux import mean_strain_through
-    from forming_fenicsx.post.forces import reaction_on
-
+    """The radial_problem on the uniform sector_mesh of ``cells``, solved by ``method``
+    (radial_errors)."""
     problem = radial_problem(symmetry, n, element, cells, method, comm, material, tolerance)
-    scene = problem.scene
+    return radial_errors(problem, solve_radial(problem), n)
+
+
+def solve_radial(problem: FlowProblem) -> SolveResult:
+    """A radial_problem solved by its scene's method; one that does not converge raises."""
     solver = solver_for(problem)
     result = solver.solve()
     solver.destroy()
     if not result.converged:
-        raise RuntimeError(f"radial flow {symmetry} n = {n} {element} {cells} cells: "
-                           f"{result.reason}")
+        scene = problem.scene
+        raise RuntimeError(f"radial flow {scene.geometry.symmetry} "
+                           f"{scene.discretisation.element}: {result.reason}")
+    return result
+
+
+def radial_errors(problem: FlowProblem, result: SolveResult, n: float) -> dict[str, float]:
+    """The L2 and H1-seminorm velocity errors of a solved radial_problem (relative to the exact
+    field's norms) and the mean axial stress on the exit cap, F / (pi rho1^2 sin^2 alpha) (cone)
+    or F / (rho1 sin alpha) (wedge), beside the exact sigma_rr(rho1) (radial_stress_rise, or
+    radial_hardening_stress_rise; ``n`` the Norton law's exponent), and with a hardening law the
+    mean exit strain beside the exact eps0 + ln(A0/A1)."""
+    from forming_fenicsx.post.flux import mean_strain_through
+    from forming_fenicsx.post.forces import reaction_on
+
+    scene, comm = problem.scene, problem.comm
+    symmetry = scene.geometry.symmetry
     x = ufl.SpatialCoordinate(problem.mesh)
     exact = ufl.as_vector(radial_velocity(symmetry, x))
     error = problem.u - exact
