@@ -5,8 +5,10 @@ with an unreachable target, for a fixed number of meshes: uniform (the scene's b
 corner_grading = 1, refined), graded (corner_grading as given, refined) and adapted (the recovered
 strain-rate indicator, mesh/adapted.py). Printed per mesh: the unknowns, the value, its error
 against the exact value, the observed order in the unknowns N (error ~ N^-q from the previous mesh;
-2q is the order in a mesh size) and the level's wall time. Graded is the defaults' grading
-(corner_grading 64 toward the die's corners, wall_grading 16 along the die and toward its wall).
+2q is the order in a mesh size) and the level's wall time. "graded 8" and "graded 64" grade toward
+the die's corners only (wall_grading 1), "graded" is the defaults' grading (corner_grading 64,
+wall_grading 16 along the die segments and toward the die wall; the square die has no wall
+grading, so for Example 1 it is "graded 64").
 
 The exact cone flow (verification.radial_flow, Norton n = 0.2) has its own sector mesh: uniform,
 graded toward the exit cap (CONE_GRADING) and adapted (the same indicator and size field on the
@@ -41,6 +43,8 @@ CASES = {
 UNIFORM = ["discretisation.corner_grading=1", "discretisation.wall_grading=1"]
 KINDS = {"uniform": [*UNIFORM, "accuracy.meshes=refined"],
          "graded 8": [*UNIFORM[1:], "discretisation.corner_grading=8", "accuracy.meshes=refined"],
+         "graded 64": [*UNIFORM[1:], "discretisation.corner_grading=64",
+                       "accuracy.meshes=refined"],
          "graded": ["discretisation.corner_grading=64", "discretisation.wall_grading=16",
                     "accuracy.meshes=refined"],
          "adapted": ["accuracy.meshes=adapted"]}

@@ -46,7 +46,8 @@ def cone_zone_slope(angle: float, m: float, exit_radius: float, mesh_size: float
                      "land_length": 0.0},
         "material": {"law": "piecewise_power", "A": 1.0},
         "friction": {"law": "factor", "m": m},
-        "discretisation": {"averaging": "quadrature", "mesh_size": mesh_size},
+        "discretisation": {"averaging": "quadrature", "mesh_size": mesh_size,
+                           "corner_grading": 4.0, "wall_grading": 1.0},  # docs' meshes
         "solver": {"method": "newton"}, "output": {"fields": False, "figures": False}})
     problem, _, summary = solve_scene(scene)
     g, sigma0 = scene.geometry, summary["scales"]["flow_stress"]

@@ -24,7 +24,8 @@ BAR = {"process": {"kind": "drawing", "velocity": 1.0},
        "geometry": {"symmetry": "3d", "entry_height": 4.0, "exit_height": 3.2,
                     "entry_width": 6.0, "exit_width": 5.0, "die_angle": 8.0},
        "material": {"law": "piecewise_power", "A": 300.0}, "friction": {"mu": 0.05},
-       "discretisation": {"averaging": "quadrature", "mesh_size": 1.0, "formulation": "mixed"},
+       "discretisation": {"averaging": "quadrature", "mesh_size": 1.0, "formulation": "mixed",
+                          "corner_grading": 1.0, "wall_grading": 1.0},  # the measured mesh
        "solver": {"method": "newton"}, "output": {"fields": False, "figures": False}}
 
 

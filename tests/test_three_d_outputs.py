@@ -34,7 +34,9 @@ BAR = {"process": {"kind": "drawing", "velocity": 1.0},
                     "entry_width": 6.0, "exit_width": 5.0, "die_angle": 8.0},
        "material": {"law": "piecewise_power", "A": 300.0},
        "friction": {"mu": 0.05},
-       "discretisation": {"averaging": "quadrature", "mesh_size": 1.0},
+       # uniform blocks: the exit section's nodes equally spaced (test_hardening_writes_...)
+       "discretisation": {"averaging": "quadrature", "mesh_size": 1.0, "corner_grading": 1.0,
+                          "wall_grading": 1.0},
        "solver": {"method": "newton"},
        "output": {"fields": True, "figures": True},
        "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"}}

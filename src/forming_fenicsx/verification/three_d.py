@@ -94,7 +94,9 @@ def wire_scene(symmetry: str, mesh_size: float, mu: float, tolerance: float = 1e
         "process": {"kind": "drawing", "velocity": 1000.0}, "geometry": geometry,
         "material": {"law": "rate_power", "A": 236.0, "n": 0.01}, "friction": {"mu": mu},
         "solver": {"method": "newton", "tolerance": tolerance},
-        "discretisation": {"averaging": "quadrature", "mesh_size": mesh_size},
+        # uniform blocks in both (the meshes docs/verification.md states)
+        "discretisation": {"averaging": "quadrature", "mesh_size": mesh_size,
+                           "corner_grading": 1.0, "wall_grading": 1.0},
         "output": {"fields": False, "figures": False},
         "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"}})
 
