@@ -68,7 +68,12 @@ def test_same_numbers_on_one_and_all_ranks():
     assert parallel["linear_solves"] == serial["linear_solves"]
     assert parallel["dofs"] == serial["dofs"]
     for key in KEYS:
-        assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-14), key
+        if key != "force_balance_residual":
+            assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-14), key
+    # a difference of two forces over the force: its precision is the forces' relative one (the
+    # default grading's run: 3.3012e-4 on both, 2.9e-10 apart)
+    assert parallel["force_balance_residual"] == pytest.approx(serial["force_balance_residual"],
+                                                               abs=1e-8)
 
 
 def test_q1_with_complete_volumetric_integration_locks():

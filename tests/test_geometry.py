@@ -98,6 +98,15 @@ def test_graded_edge_ratio():
     assert graded_edge(10.0, 1.0, 1.0, toward_end=True) == (10, 1.0)
 
 
+def test_a_graded_edge_of_few_elements_is_capped():
+    """Three elements graded by 64: neighbours differ by MAX_RATIO = 3 (not 8), the whole edge by 9;
+    away from the end the same (progression 3); ten elements get the full 64."""
+    assert graded_edge(3.0, 1.0, 64.0, toward_end=True) == pytest.approx((3, 1 / 3), rel=1e-15)
+    assert graded_edge(3.0, 1.0, 64.0, toward_end=False) == pytest.approx((3, 3.0), rel=1e-15)
+    elements, progression = graded_edge(10.0, 1.0, 64.0, toward_end=False)
+    assert progression ** (elements - 1) == pytest.approx(64.0, rel=1e-12)
+
+
 def smallest_cell_near(fm, point) -> float:
     """Bounding-box diagonal of the owned cell nearest to ``point`` (over all ranks)."""
     mesh = fm.mesh
@@ -135,14 +144,14 @@ def _drawing(wall: float, symmetry: str = "plane_strain", size: float = 0.1):
 def test_wall_grading_refines_toward_the_die_wall_and_its_corners():
     """Example 2's die (a 6 degree cone from x = 3, a land from x = 4.34 to 4.49 at y = 0.672),
     cells compared by their diagonals: with wall_grading 1 as large at the wall over the cone's
-    middle as at the axis under it (0.112); with 16 the cell at the die entry corner is a sixth of
-    the uniform one (0.022 against 0.135) and the thickness is graded: at the axis under the cone's
+    middle as at the axis under it (0.112); with 16 the cell at the die entry corner is a fifth of
+    the uniform one (0.029 against 0.135) and the thickness is graded: at the axis under the cone's
     middle the cell is three times the one at the wall above it (0.242 against 0.076)."""
     uniform, graded = _drawing(1.0), _drawing(16.0)
     entry, wall, axis = np.array([3.0, 0.8125]), np.array([3.67, 0.743]), np.array([3.67, 0.0])
     assert smallest_cell_near(uniform, wall) == pytest.approx(smallest_cell_near(uniform, axis),
                                                               rel=1e-6)
-    assert smallest_cell_near(graded, entry) < smallest_cell_near(uniform, entry) / 5
+    assert smallest_cell_near(graded, entry) < smallest_cell_near(uniform, entry) / 4
     assert smallest_cell_near(graded, wall) < smallest_cell_near(uniform, wall)
     assert smallest_cell_near(graded, axis) > 3 * smallest_cell_near(graded, wall)
 
