@@ -38,7 +38,7 @@ def test_second_order_with_unequal_refinements():
     sizes = [0.4, 0.25, 0.12]
     values = [5 - 2 * h**2 for h in sizes]
     assert observed_order(sizes, values) == pytest.approx(2.0, abs=1e-9)
-    found = estimate(sizes, values, degree=1)
+    found = estimate(sizes, values, degree=2)
     assert found.extrapolated == pytest.approx(5.0, abs=1e-12)
     assert found.error == pytest.approx(FACTOR * 2 * 0.12**2, abs=1e-12)
 
@@ -59,13 +59,24 @@ def test_oscillating_sequence_uses_the_last_difference_and_no_extrapolation():
 
 
 def test_too_high_order_is_clipped_and_never_below_the_last_difference():
-    """Differences shrinking by 2^10 on halved meshes: order 10 > 2(k + 1) = 6 for Q2, so the
-    estimate is the last difference (Richardson's at order 6 would be 63 times smaller)."""
+    """Differences shrinking by 2^10 on halved meshes: order 10 > k + 1 = 3 for Q2, so the
+    estimate is the last difference (Richardson's at order 3 would be 7 times smaller)."""
     sizes = [0.4, 0.2, 0.1]
     found = estimate(sizes, [1.0 + 1024e-3, 1.001, 1.0 + 1e-3 / 1024], degree=2)
     assert found.order == pytest.approx(10.0, abs=1e-6)
     assert found.kind.startswith("observed order 10")
     assert found.error == pytest.approx(FACTOR * (1e-3 - 1e-3 / 1024), rel=1e-9)
+
+
+def test_the_steel_rods_order_is_not_asymptotic():
+    """A steel rod's three adapted meshes (docs/accuracy.md): order 3.37 > k + 1 = 3 for Q2, so the
+    estimate is 1.25 |f3 - f2| = 0.104 % (Richardson's was 0.0072 %; the next mesh moved the value
+    by 0.080 %)."""
+    sizes, values = [1.735, 0.7018, 0.3112], [679.444, 667.507, 666.95]
+    found = estimate(sizes, values, degree=2)
+    assert found.order == pytest.approx(3.366, abs=1e-3) and found.kind.startswith("observed")
+    assert relative(found, values[-1]) == pytest.approx(0.00104, rel=0.01)
+    assert relative(found, values[-1]) > abs(666.417 / values[-1] - 1)
 
 
 def test_too_low_order_takes_the_clipped_order_which_is_less_optimistic():

@@ -14,9 +14,11 @@ ALPHA = 1e-3
 
 
 def drawing(**sections) -> dict:
-    """Example 2's scene (paper constants) on the coarse mesh, mu = 0.2 unless given."""
+    """Example 2's scene (paper constants, its uniform mesh) on the coarse mesh, mu = 0.2 unless
+    given."""
     sections["discretisation"] = {"mesh_size": 0.1, "element": "Q2",
-                                  "volumetric_integration": "reduced",
+                                  "volumetric_integration": "reduced", "corner_grading": 1.0,
+                                  "wall_grading": 1.0,
                                   **sections.get("discretisation", {})}
     sections["solver"] = {"method": "direct", "force_tolerance": 1e-3, "max_iterations": 500,
                           **sections.get("solver", {})}
