@@ -112,10 +112,10 @@ def radial_rows(comm) -> list[list]:
         exact = results[0]["exact_exit_stress"]
         for last in (3, 4):
             sizes = [1.0 / c for c in cells[:last]]
-            found = estimate(sizes, values[:last], 2)
+            found = estimate(sizes, values[:last])
             true = abs(values[last - 1] / exact - 1)
             est = relative(found, values[last - 1])
-            change = extrapolation_error(sizes, values[:last], 2) / abs(found.extrapolated)
+            change = extrapolation_error(sizes, values[:last]) / abs(found.extrapolated)
             rows.append([f"{symmetry} n = {n}", " ".join(str(c) for c in cells[:last]),
                          f"{values[last - 1]:.6g}", f"{exact:.6g}", f"{found.order:.3g}",
                          f"{100 * est:.3g} %", f"{100 * true:.3g} %", f"{est / true:.2f}",

@@ -155,7 +155,7 @@ def limit(runs: list[dict[str, Any]], sizes: list[float], key: str,
     """(Richardson's limit of a quantity over ``over``, its finest value's estimated relative
     error); the finest value when nothing extrapolates."""
     values = [r[key] / over for r in runs]
-    found = estimate(sizes, values, degree=2)
+    found = estimate(sizes, values)
     extrapolated = found.extrapolated if math.isfinite(found.extrapolated) else values[-1]
     return extrapolated, relative(found, values[-1])
 

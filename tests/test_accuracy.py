@@ -25,7 +25,7 @@ DEMO = str(Path(__file__).parents[1] / "demos" / "example1_extrusion.toml")
 
 def test_first_order_sequence_is_extrapolated_exactly():
     sizes = [0.4, 0.2, 0.1]
-    found = estimate(sizes, [2 + 0.3 * h for h in sizes], degree=2)
+    found = estimate(sizes, [2 + 0.3 * h for h in sizes])
     assert found.kind == "richardson"
     assert found.order == pytest.approx(1.0, abs=1e-9)
     assert found.extrapolated == pytest.approx(2.0, abs=1e-12)
@@ -33,36 +33,50 @@ def test_first_order_sequence_is_extrapolated_exactly():
     assert relative(found, 2.03) == pytest.approx(FACTOR * 0.015, abs=1e-12)
 
 
-def test_second_order_with_unequal_refinements():
-    """The observed order of three meshes of any sizes, not only halved ones."""
+def test_an_order_of_one_and_a_half_with_unequal_refinements():
+    """The observed order of three meshes of any sizes, not only halved ones; Richardson's limit
+    and error at that order (within [MIN_ORDER, HIGHEST_ORDER])."""
     sizes = [0.4, 0.25, 0.12]
-    values = [5 - 2 * h**2 for h in sizes]
-    assert observed_order(sizes, values) == pytest.approx(2.0, abs=1e-9)
-    found = estimate(sizes, values, degree=2)
+    values = [5 - 2 * h**1.5 for h in sizes]
+    assert observed_order(sizes, values) == pytest.approx(1.5, abs=1e-9)
+    found = estimate(sizes, values)
+    assert found.kind == "richardson"
     assert found.extrapolated == pytest.approx(5.0, abs=1e-12)
-    assert found.error == pytest.approx(FACTOR * 2 * 0.12**2, abs=1e-12)
+    assert found.error == pytest.approx(FACTOR * 2 * 0.12**1.5, abs=1e-12)
+
+
+def test_a_second_order_sequence_just_above_the_highest_order_is_guarded():
+    """h^2.2 (the asymptotic sequences of the exact cases observed at most 2.1): the guarded
+    estimate, Richardson's at order 1, which is larger than at the observed order."""
+    sizes = [0.4, 0.2, 0.1]
+    values = [5 - 2 * h**2.2 for h in sizes]
+    found = estimate(sizes, values)
+    assert found.order == pytest.approx(2.2, abs=1e-9) and found.kind.startswith("observed")
+    assert found.error == pytest.approx(FACTOR * (values[2] - values[1]), rel=1e-9)
+    assert found.error > FACTOR * 2 * 0.1**2.2
 
 
 def test_only_the_last_three_meshes_count():
     """An early, non-asymptotic value does not spoil the estimate of a longer sequence."""
     sizes = [0.8, 0.4, 0.2, 0.1]
     values = [7.0] + [1 + h for h in sizes[1:]]
-    assert estimate(sizes, values, degree=2).extrapolated == pytest.approx(1.0, abs=1e-12)
+    assert estimate(sizes, values).extrapolated == pytest.approx(1.0, abs=1e-12)
 
 
 def test_oscillating_sequence_uses_the_last_difference_and_no_extrapolation():
-    found = estimate([0.4, 0.2, 0.1], [1.0, 1.2, 1.1], degree=2)
+    found = estimate([0.4, 0.2, 0.1], [1.0, 1.2, 1.1])
     assert math.isnan(found.order) and math.isnan(found.extrapolated)
     assert found.error == pytest.approx(FACTOR * 0.1, abs=1e-12)
     assert found.kind.startswith("oscillating")
     assert relative(found, 1.1) == pytest.approx(FACTOR * 0.1 / 1.1)
 
 
-def test_too_high_order_is_clipped_and_never_below_the_last_difference():
+def test_too_high_order_takes_order_one_and_never_below_the_last_difference():
     """Differences shrinking by 2^10 on halved meshes: order 10 > k + 1 = 3 for Q2, so the
-    estimate is the last difference (Richardson's at order 3 would be 7 times smaller)."""
+    estimate is Richardson's at order 1, on halved meshes the last difference (Richardson's at
+    order 3 would be 7 times smaller)."""
     sizes = [0.4, 0.2, 0.1]
-    found = estimate(sizes, [1.0 + 1024e-3, 1.001, 1.0 + 1e-3 / 1024], degree=2)
+    found = estimate(sizes, [1.0 + 1024e-3, 1.001, 1.0 + 1e-3 / 1024])
     assert found.order == pytest.approx(10.0, abs=1e-6)
     assert found.kind.startswith("observed order 10")
     assert found.error == pytest.approx(FACTOR * (1e-3 - 1e-3 / 1024), rel=1e-9)
@@ -73,17 +87,30 @@ def test_the_steel_rods_order_is_not_asymptotic():
     estimate is 1.25 |f3 - f2| = 0.104 % (Richardson's was 0.0072 %; the next mesh moved the value
     by 0.080 %)."""
     sizes, values = [1.735, 0.7018, 0.3112], [679.444, 667.507, 666.95]
-    found = estimate(sizes, values, degree=2)
+    found = estimate(sizes, values)
     assert found.order == pytest.approx(3.366, abs=1e-3) and found.kind.startswith("observed")
     assert relative(found, values[-1]) == pytest.approx(0.00104, rel=0.01)
     assert relative(found, values[-1]) > abs(666.417 / values[-1] - 1)
+
+
+def test_a_strips_high_order_on_a_small_last_step_takes_order_one():
+    """strip_mm's four adapted meshes to 1 % (docs/accuracy.md): order 3.11 > 3 from the last three,
+    the last mesh 1.64 times finer; Richardson's at order 1 (0.232 %) is above 1.25 times the last
+    change (0.149 %, the estimate before) and above the error, about 0.19 % (the 0.1 % sequence's
+    finest value, 117.829)."""
+    sizes = [0.07830348355391624, 0.035676717809245556, 0.02170245464599911]
+    values = [120.07092853712948, 118.18834417985411, 118.04812066998672]
+    found = estimate(sizes, values)
+    assert found.order == pytest.approx(3.11, abs=0.01) and found.kind.startswith("observed")
+    assert relative(found, values[-1]) == pytest.approx(0.00232, rel=0.02)
+    assert relative(found, values[-1]) > 118.04812066998672 / 117.829 - 1
 
 
 def test_too_low_order_takes_the_clipped_order_which_is_less_optimistic():
     """Order 0.2 < MIN_ORDER: Richardson's error at order 0.5, larger than the last difference."""
     sizes = [0.4, 0.2, 0.1]
     values = [1 + h**0.2 for h in sizes]
-    found = estimate(sizes, values, degree=2)
+    found = estimate(sizes, values)
     assert found.order == pytest.approx(0.2, abs=1e-9)
     last = values[1] - values[2]
     assert found.error == pytest.approx(FACTOR * last / (2**MIN_ORDER - 1), rel=1e-9)
@@ -95,12 +122,12 @@ def test_diverging_sequence_has_order_zero_and_the_guarded_estimate():
     values = [1.0, 1.1, 1.3]  # differences grow
     assert observed_order(sizes, values) == 0.0
     guarded = FACTOR * 0.2 / (2**MIN_ORDER - 1)
-    assert estimate(sizes, values, degree=2).error == pytest.approx(guarded, rel=1e-9)
+    assert estimate(sizes, values).error == pytest.approx(guarded, rel=1e-9)
 
 
 def test_next_mesh_size_predicts_from_the_order_within_limits():
     sizes = [0.4, 0.2, 0.1]
-    found = estimate(sizes, [2 + 0.3 * h for h in sizes], degree=2)  # order 1
+    found = estimate(sizes, [2 + 0.3 * h for h in sizes])  # order 1
     # 1.5 % -> 0.8 x 1 %: h/1.875
     assert next_mesh_size(0.1, found, 0.015, 0.01, 2.0) == pytest.approx(0.1 / 1.875)
     assert next_mesh_size(0.1, found, 0.015, 0.001, 2.0) == pytest.approx(0.1 / 3.0)  # MAX_RATIO
@@ -117,12 +144,12 @@ def test_the_extrapolation_is_estimated_by_its_change_when_a_mesh_is_added():
     the change (0.036) lies between the current limit's error (0.021) and the finest value's."""
     sizes = [0.8, 0.4, 0.2, 0.1]
     values = [2 + h + h**2 for h in sizes]
-    assert math.isnan(extrapolation_error(sizes[:3], values[:3], degree=2))
-    change = extrapolation_error(sizes, values, degree=2)
-    last, before = estimate(sizes, values, 2), estimate(sizes[:3], values[:3], 2)
+    assert math.isnan(extrapolation_error(sizes[:3], values[:3]))
+    change = extrapolation_error(sizes, values)
+    last, before = estimate(sizes, values), estimate(sizes[:3], values[:3])
     assert change == pytest.approx(abs(last.extrapolated - before.extrapolated), abs=1e-15)
     assert abs(last.extrapolated - 2) < change < abs(values[-1] - 2)
-    answer = choose_answer(sizes, values, last, degree=2)
+    answer = choose_answer(sizes, values, last)
     assert answer.kind == "extrapolated" and answer.value == last.extrapolated
     assert answer.estimate == pytest.approx(change / abs(last.extrapolated), abs=1e-15)
     assert "less than the finest value's" in answer.reason
@@ -133,12 +160,12 @@ def test_the_finest_value_is_the_answer_without_an_asymptotic_extrapolation():
     own; the finest value with Richardson's (or the guarded) estimate."""
     sizes = [0.8, 0.4, 0.2, 0.1]
     values = [2 + h for h in sizes]
-    three = choose_answer(sizes[:3], values[:3], estimate(sizes[:3], values[:3], 2), degree=2)
+    three = choose_answer(sizes[:3], values[:3], estimate(sizes[:3], values[:3]))
     assert three.kind == "finest" and three.value == values[2]
     assert three.estimate == pytest.approx(FACTOR * 0.2 / 2, abs=1e-12)
     wobbly = [2.5, 2.3, 2.4] + [2 + 0.1]
-    assert math.isnan(extrapolation_error(sizes, wobbly, degree=2))
-    answer = choose_answer(sizes, wobbly, estimate(sizes, wobbly, 2), degree=2)
+    assert math.isnan(extrapolation_error(sizes, wobbly))
+    answer = choose_answer(sizes, wobbly, estimate(sizes, wobbly))
     assert answer.kind == "finest" and "no estimate of its own" in answer.reason
 
 

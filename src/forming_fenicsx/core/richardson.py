@@ -7,8 +7,9 @@ order p solves (f1 - f2)/(f2 - f3) = (h1^p - h2^p)/(h2^p - h3^p), the extrapolat
 F = f3 - (f2 - f3) h3^p/(h2^p - h3^p) and the error of the finest value is estimated as
 FACTOR |f3 - F|. A sequence outside its asymptotic range is guarded against: when the differences
 change sign (an oscillation) the estimate is FACTOR |f3 - f2| and nothing is extrapolated; when
-the observed order lies outside [MIN_ORDER, k + 1] (k the element degree) it is clipped to that
-range and the estimate is FACTOR times the larger of the clipped Richardson error and |f3 - f2|.
+the observed order lies below MIN_ORDER the estimate is FACTOR times the larger of Richardson's
+error at MIN_ORDER and |f3 - f2|; above HIGHEST_ORDER the sequence's order is unknown and the
+estimate is FACTOR times the larger of Richardson's error at SLOWEST_ORDER and |f3 - f2|.
 FACTOR = 1.25 is Roache's factor of safety of the grid convergence index for three meshes.
 
 The extrapolated value's own error, from four meshes or more: |F_n - F_(n-1)|, the change of the
@@ -25,10 +26,16 @@ FACTOR = 1.25      # the estimate over Richardson's error (Roache's grid converg
 # below this order the sequence is taken as not yet asymptotic: on halved meshes the limit would
 # lie more than 1/(2^0.5 - 1) = 2.4 times the last change beyond the finest value
 MIN_ORDER = 0.5
-# above k + 1 for Qk (ABOVE_DEGREE) neither: no sequence of the exact cases observed more than 2.1
-# with Q2 (docs/accuracy.md), and a steel rod's three adapted meshes with 3.37 gave 0.0072 % where
-# the next mesh moved the value by 0.08 % (under 2(k + 1) = 6, the bound before, Richardson's)
-ABOVE_DEGREE = 1
+# above this neither, for Q1 and Q2: the asymptotic sequences of the exact cases observed at most
+# 1.84 (adapted, singular corners) and 2.1 (the smooth cone flow), while three scenes of users
+# observed 2.37, 3.11 and 3.37 on their first adapted meshes and Richardson's estimate was a half
+# to a tenth of their error (docs/accuracy.md; the bound was 2(k + 1) = 6 for Q2)
+HIGHEST_ORDER = 2.0
+# such a sequence is taken to converge no faster than uniform meshes do at the die's singular
+# corners (order 1 on every exact case, docs/accuracy.md): a strip's four adapted meshes observed
+# 3.11 with a last step of h 1.64 times smaller, and 1.25 |f3 - f2| was 0.149 % where the error
+# was about 0.2 %
+SLOWEST_ORDER = 1.0
 
 
 @dataclass
@@ -85,9 +92,9 @@ def richardson(sizes: list[float], values: list[float]) -> tuple[float, float]:
     return richardson_error(sizes, values, order)[0], order
 
 
-def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
+def estimate(sizes: list[float], values: list[float]) -> Estimate:
     """The error estimate of the finest of at least three values on meshes of decreasing sizes
-    (module docstring): Richardson's when the observed order lies in [MIN_ORDER, degree + 1],
+    (module docstring): Richardson's when the observed order lies in [MIN_ORDER, HIGHEST_ORDER],
     else the guarded, less optimistic one."""
     if len(values) < 3:
         raise ValueError("an observed order needs three meshes")
@@ -98,25 +105,25 @@ def estimate(sizes: list[float], values: list[float], degree: int) -> Estimate:
     if math.isnan(order):
         return Estimate(math.nan, FACTOR * last, math.nan,
                         "oscillating: the last two values' difference, no extrapolation")
-    highest = float(degree + ABOVE_DEGREE)
+    highest = HIGHEST_ORDER
     if MIN_ORDER <= order <= highest:
         limit, error = richardson_error(sizes, values, order)
         return Estimate(limit, FACTOR * error, order, "richardson")
-    clipped = min(max(order, MIN_ORDER), highest)
-    limit, error = richardson_error(sizes, values, clipped)
+    assumed = MIN_ORDER if order < MIN_ORDER else SLOWEST_ORDER
+    limit, error = richardson_error(sizes, values, assumed)
     return Estimate(limit, FACTOR * max(error, last), order,
                     f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not "
-                    f"asymptotic): the larger of Richardson's with order {clipped:g} and the last "
+                    f"asymptotic): the larger of Richardson's with order {assumed:g} and the last "
                     "two values' difference")
 
 
-def extrapolation_error(sizes: list[float], values: list[float], degree: int) -> float:
+def extrapolation_error(sizes: list[float], values: list[float]) -> float:
     """The estimated absolute error of the extrapolated value of the last three meshes: the change
     of the limit when the finest mesh was added (module docstring); NaN with fewer than four
     meshes or when either limit is not Richardson's (no asymptotic sequence)."""
     if len(values) < 4:
         return math.nan
-    last, before = estimate(sizes, values, degree), estimate(sizes[:-1], values[:-1], degree)
+    last, before = estimate(sizes, values), estimate(sizes[:-1], values[:-1])
     if last.kind != "richardson" or before.kind != "richardson":
         return math.nan
     return abs(last.extrapolated - before.extrapolated)

@@ -56,11 +56,11 @@ class Answer:
     reason: str
 
 
-def choose_answer(sizes: list[float], values: list[float], found: Estimate, degree: int) -> Answer:
+def choose_answer(sizes: list[float], values: list[float], found: Estimate) -> Answer:
     """The extrapolated value when its estimate (the change of the extrapolation when the finest
     mesh was added, relative to it) is smaller than the finest value's, else the finest value."""
     finest = float(relative(found, values[-1]))
-    change = extrapolation_error(sizes, values, degree)
+    change = extrapolation_error(sizes, values)
     if math.isfinite(change):
         own = change / abs(found.extrapolated) if found.extrapolated != 0 else math.inf
         if own < finest:
@@ -172,9 +172,9 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         sizes.append(size)
         values.append(float(summary[quantity]))
         if len(values) >= 3:
-            found = estimate(sizes, values, scene.discretisation.degree)
+            found = estimate(sizes, values)
             error = float(relative(found, values[-1]))
-            answer = choose_answer(sizes, values, found, scene.discretisation.degree)
+            answer = choose_answer(sizes, values, found)
         if comm.rank == 0:
             note = f", estimated error {100 * error:.3g} % ({found.kind.split(':')[0]})" if found \
                 else ""
@@ -207,7 +207,7 @@ def solve_to_accuracy(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORL
         "estimate": error, "estimate_absolute": found.error if found else math.nan,
         "observed_order": found.order if found else math.nan,
         "estimate_kind": found.kind if found else "none: fewer than three meshes",
-        "extrapolated_estimate": (extrapolation_error(sizes, values, scene.discretisation.degree)
+        "extrapolated_estimate": (extrapolation_error(sizes, values)
                                   / abs(found.extrapolated) if found else math.nan),
         "mesh_kind": meshes, "meshes": levels,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
