@@ -31,6 +31,7 @@ STRIP = {"process": {"kind": "drawing", "velocity": 1.0},
          "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6, "die_angle": 10.0},
          "material": {"law": "piecewise_power", "A": 300.0},
          "friction": {"mu": 0.08},
+         "discretisation": {"corner_grading": 1.0, "wall_grading": 1.0},  # docs' meshes
          "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"}}
 SCENES = {
     "Example 1, mu = 0.1, h = 0.25": (DEMOS / "example1_extrusion_mu01.toml",
