@@ -105,14 +105,13 @@ def estimate(sizes: list[float], values: list[float]) -> Estimate:
     if math.isnan(order):
         return Estimate(math.nan, FACTOR * last, math.nan,
                         "oscillating: the last two values' difference, no extrapolation")
-    highest = HIGHEST_ORDER
-    if MIN_ORDER <= order <= highest:
+    if MIN_ORDER <= order <= HIGHEST_ORDER:
         limit, error = richardson_error(sizes, values, order)
         return Estimate(limit, FACTOR * error, order, "richardson")
     assumed = MIN_ORDER if order < MIN_ORDER else SLOWEST_ORDER
     limit, error = richardson_error(sizes, values, assumed)
     return Estimate(limit, FACTOR * max(error, last), order,
-                    f"observed order {order:.3g} outside [{MIN_ORDER:g}, {highest:g}] (not "
+                    f"observed order {order:.3g} outside [{MIN_ORDER:g}, {HIGHEST_ORDER:g}] (not "
                     f"asymptotic): the larger of Richardson's with order {assumed:g} and the last "
                     "two values' difference")
 
