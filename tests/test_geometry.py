@@ -107,17 +107,24 @@ def test_a_graded_edge_of_few_elements_is_capped():
     assert progression ** (elements - 1) == pytest.approx(64.0, rel=1e-12)
 
 
+def nearest_cell_box(fm, point) -> np.ndarray:
+    """The bounding box's extent along each axis of the owned cell (of any dimension) whose
+    vertices' mean is nearest to ``point``, over all ranks."""
+    mesh = fm.mesh
+    dim = mesh.topology.dim
+    owned = mesh.topology.index_map(dim).size_local
+    corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned, :2**dim]][:, :, :dim]
+    found = (np.inf, None)
+    if owned:
+        distance = np.linalg.norm(corners.mean(axis=1) - point, axis=1)
+        nearest = distance.argmin()
+        found = (distance[nearest], np.ptp(corners[nearest], axis=0))
+    return min(mesh.comm.allgather(found), key=lambda each: each[0])[1]
+
+
 def smallest_cell_near(fm, point) -> float:
     """Bounding-box diagonal of the owned cell nearest to ``point`` (over all ranks)."""
-    mesh = fm.mesh
-    owned = mesh.topology.index_map(2).size_local
-    corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned, :4]][:, :, :2]
-    if owned == 0:
-        return mesh.comm.allreduce((np.inf, np.inf), op=MPI.MIN)[1]
-    distance = np.linalg.norm(corners.mean(axis=1) - point, axis=1)
-    diagonal = np.linalg.norm(np.ptp(corners, axis=1), axis=1)
-    nearest = distance.argmin()
-    return mesh.comm.allreduce((distance[nearest], diagonal[nearest]), op=MPI.MIN)[1]
+    return float(np.linalg.norm(nearest_cell_box(fm, point)))
 
 
 def test_corner_grading_refines_toward_die_corner():
@@ -160,13 +167,7 @@ def test_wall_grading_in_3d_refines_toward_the_die_faces():
     """A quarter rectangular bar: with wall_grading 16 the hexahedra along the edge where the two
     die faces meet are smaller than at the axis (uniform: alike), the volume the same."""
     def extents(fm, point) -> float:
-        mesh = fm.mesh
-        owned = mesh.topology.index_map(3).size_local
-        corners = mesh.geometry.x[cell_geometry_nodes(mesh)[:owned, :8]]
-        distance = np.linalg.norm(corners.mean(axis=1) - point, axis=1)
-        nearest = distance.argmin()
-        found = (distance[nearest], float(np.prod(np.ptp(corners[nearest], axis=0))))
-        return mesh.comm.allreduce(found, op=MPI.MIN)[1]
+        return float(np.prod(nearest_cell_box(fm, point)))
 
     volumes = []
     for wall in (1.0, 16.0):
