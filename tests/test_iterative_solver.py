@@ -40,9 +40,8 @@ def _solved(linear: str, **sections: dict) -> tuple[dict, list[int]]:
 def test_iterative_agrees_with_direct():
     """A 4 x 6 -> 3.2 x 5 mm bar, 8 degrees, mu = 0.05, law (4.5), Newton on a 1 mm mesh (3147
     unknowns): the iterative solves take the run through the same Newton steps to the same answer,
-    the drawing stress, die pressure and forces within 1e-6 of MUMPS' (measured: 1.6e-8 for the
-    drawing stress with the p-multigrid, 4.7e-10 with GAMG on the Q2 block), with the
-    Krylov iterations counted per step."""
+    the drawing stress, die pressure and forces within 1e-6 of MUMPS' (measured for the drawing
+    stress: 7e-8 on 1 rank, 3.3e-7 on 2), with the Krylov iterations counted per step."""
     direct, direct_krylov = _solved("direct")
     iterative, krylov = _solved("iterative")
     assert iterative["converged"] and direct["converged"]
@@ -97,7 +96,8 @@ def test_scale_case_row_and_growth_exponents():
     assert row["converged"] and row["ranks"] == MPI.COMM_WORLD.size
     assert len(row["krylov_per_newton_step"]) >= 3
     assert 1 < max(row["krylov_per_newton_step"]) <= 200
-    assert min(row["velocity_per_newton_step"]) > max(row["krylov_per_newton_step"]) - 1
+    # the velocity block: one application of its p-multigrid per outer iteration
+    assert row["velocity_per_newton_step"] == row["krylov_per_newton_step"]
     rows = [{"linear": "direct", "ranks": 1, "dofs": n, "wall_time_s": 2.0 * n**1.5,
              "solve_time_s": n**1.5, "peak_memory_mb": 3.0 * n} for n in (1e3, 8e3, 6.4e4)]
     (fit,) = growth_exponents(rows)
@@ -145,10 +145,11 @@ def test_p_multigrid_interpolates_into_the_velocity_block():
 
 
 def test_p_multigrid_velocity_iterations_per_newton_step():
-    """The bar on the 1.2 and 1 mm meshes: the velocity block's GMRES iterations per Newton step
-    with the p-multigrid (the default) stay below 400 (measured at most 182 on 1 rank, 296 on 2,
-    at 1 mm), where GAMG on the Q2 block needs 650 (1 rank) and 600 (2 ranks) at 1 mm; the answer
-    agrees with GAMG's within 1e-6."""
+    """The bar on the 1.2 and 1 mm meshes, one application of the velocity block's preconditioner
+    per outer iteration: with the p-multigrid (the default) at most 75 per Newton step (measured
+    at most 49 on 1 rank, 53 on 2), more than 1.5 times fewer than with GAMG on the Q2 block
+    (measured 108 to 122, 2.0 to 2.3 times the p-multigrid's); the answers agree within 1e-6
+    (measured 1.4e-7 to 2.9e-7)."""
     gamg = {"fieldsplit_u_pc_type": "gamg"}
     for size in (1.2, 1.0):
         rows = {}
@@ -160,7 +161,7 @@ def test_p_multigrid_velocity_iterations_per_newton_step():
             steps = [record.velocity_iterations for record in result.history
                      if not math.isnan(record.residual)]
             rows[name] = (summary, max(steps))
-        assert rows["mg"][0]["converged"] and rows["mg"][1] < 400, (size, rows["mg"][1])
-        assert rows["gamg"][1] > 400, (size, rows["gamg"][1])
+        assert rows["mg"][0]["converged"] and rows["mg"][1] < 75, (size, rows["mg"][1])
+        assert rows["gamg"][1] > 1.5 * rows["mg"][1], (size, rows["gamg"][1], rows["mg"][1])
         assert rows["mg"][0]["drawing_stress"] == pytest.approx(
             rows["gamg"][0]["drawing_stress"], rel=1e-6)

@@ -21,9 +21,9 @@ residual then weighs every row alike (unscaled, the rows of the rigid zones, who
 rate window's 1e6 times larger, decide it, and the pressure of the plastic zone is left far less
 accurate than the residual says). PETSc fieldsplit
 (Schur, upper factorisation) under the solver's options prefix: multigrid on the velocity block
-(GMRES to 1e-2 preconditioned by the two-level p-multigrid of p_multigrid.py, Q2 smoothed and Q1
-solved by GAMG; one V-cycle alone left the outer iteration far longer), the Schur preconditioner
-(-1 on the scaled pressures), FGMRES outside. ``fieldsplit_u_pc_type = "gamg"`` in
+(one application of the two-level p-multigrid of p_multigrid.py per outer iteration, Q2 smoothed
+and Q1 solved by GAMG cycles), the Schur preconditioner (-1 on the scaled pressures), FGMRES
+outside. ``fieldsplit_u_pc_type = "gamg"`` in
 solver.petsc_options puts GAMG on the Q2 block itself instead (with the rigid-body near-null
 space), the preconditioner before the p-multigrid.
 """
@@ -43,11 +43,13 @@ from forming_fenicsx.fem.p_multigrid import PMultigrid, orthonormal_null_space
 GAMMA = 10.0
 # the options under the KSP's prefix (a scene's solver.petsc_options override any)
 OPTIONS: dict[str, Any] = {
-    "ksp_type": "fgmres", "ksp_gmres_restart": 200, "ksp_max_it": 200,
+    "ksp_type": "fgmres", "ksp_gmres_restart": 200, "ksp_max_it": 1000,
     "ksp_initial_guess_nonzero": True, "ksp_converged_use_initial_residual_norm": True,
     "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur",
     "pc_fieldsplit_schur_fact_type": "upper", "pc_fieldsplit_schur_precondition": "user",
-    "fieldsplit_u_ksp_type": "gmres", "fieldsplit_u_ksp_rtol": 1e-2, "fieldsplit_u_ksp_max_it": 50,
+    # the velocity block: one application of its preconditioner per outer iteration (a Krylov
+    # solve inside each, GMRES to 1e-2, took twice the time: docs/iterative_solver.md)
+    "fieldsplit_u_ksp_type": "preonly",
     # "mg": the velocity block's p-multigrid (p_multigrid.py; its levels' options under
     # fieldsplit_u_mg_levels_ and fieldsplit_u_mg_coarse_); "gamg": GAMG on the Q2 block, with
     # this graph threshold
@@ -125,6 +127,8 @@ class AugmentedSaddlePoint:
         self.schur.setDiagonal(self._inverse)
         self.schur.assemble()
         self._B: PETSc.Mat | None = None  # the pressure rows of the system (constant)
+        self._scaled: PETSc.Mat | None = None  # D^-1 B
+        self._product: PETSc.Mat | None = None  # B^T D^-1 B
         self.velocity_iterations = 0  # the velocity block's Krylov iterations, all solves
 
     def augment_matrix(self, A: PETSc.Mat) -> None:
@@ -138,12 +142,14 @@ class AugmentedSaddlePoint:
         self._inverse.reciprocal()
         if self._B is None:  # -(q, div u) does not change with the state
             self._B = A.createSubMatrix(self.pressure, self.rows)
-        scaled = self._B.copy()
-        scaled.diagonalScale(L=self._inverse)
-        product = self._B.transposeMatMult(scaled)
-        A.axpy(self.gamma, product, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        for item in (scaled, product):
-            item.destroy()
+        if self._scaled is None:
+            self._scaled = self._B.copy()
+        else:
+            self._B.copy(self._scaled, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self._scaled.diagonalScale(L=self._inverse)
+        # the same matrices and pattern at every call: the product's symbolic phase is kept
+        self._product = self._B.transposeMatMult(self._scaled, result=self._product)
+        A.axpy(self.gamma, self._product, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
     def augment_vector(self, b: PETSc.Vec) -> None:
         """b += gamma B^T D^-1 g, g the pressure rows of b (after augment_matrix)."""
@@ -230,7 +236,8 @@ class AugmentedSaddlePoint:
             self.velocity_iterations += 1
 
     def destroy(self) -> None:
-        for item in (self._weight_matrix, self.schur, self._inverse, self._B, self.modes,
-                     self._scale, self.velocity, self.pressure, self.rows, self.multigrid):
+        for item in (self._weight_matrix, self.schur, self._inverse, self._B, self._scaled,
+                     self._product, self.modes, self._scale, self.velocity, self.pressure,
+                     self.rows, self.multigrid):
             if item is not None:
                 item.destroy()

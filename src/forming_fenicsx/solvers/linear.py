@@ -20,14 +20,17 @@ from forming_fenicsx.fem.saddle_point import AugmentedSaddlePoint
 # the iterative solves' relative residual (relative to the initial one: the current iterate's for
 # the secant systems, F's for Newton's): KRYLOV_FACTOR times the last relative increment of the
 # nonlinear iteration, within [KRYLOV_FLOOR times solver.tolerance, KRYLOV_CEILING]: tighter than
-# the nonlinear iteration's own error (docs/iterative_solver.md)
+# the nonlinear iteration's own error. The ceiling holds the first solves, whose increments are
+# large: at 1e-3 their error moved the iterates by 1 %, the augmented contact's multiplier then
+# settled elsewhere within its window and the answer by up to 1.5e-4 (docs/iterative_solver.md)
 KRYLOV_FACTOR = 1e-3
 KRYLOV_FLOOR = 1e-3
-KRYLOV_CEILING = 1e-3
-# solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: the
-# iterative solver was slower than MUMPS at every size both solved (3k to 92k unknowns), and MUMPS'
-# memory, extrapolated (N^1.27), reaches this machine's 24 GiB near 700k unknowns, where the
-# iterative solver's, 17 GB at 925k, still fits (docs/iterative_solver.md)
+KRYLOV_CEILING = 1e-5
+# solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: on
+# one rank the iterative solver was slower than MUMPS at every size both solved (3k to 40k unknowns,
+# 1.3 to 1.8 times), on two it overtook MUMPS only near 92k; MUMPS' memory, extrapolated (N^1.27),
+# reaches this machine's 24 GiB near 700k unknowns, where the iterative solver's, 15 GB at 925k,
+# still fits (docs/iterative_solver.md)
 ITERATIVE_FROM = 500_000
 
 
@@ -82,8 +85,10 @@ class LinearSolver(LinearProblem):
 
     def assemble_matrix(self) -> None:
         super().assemble_matrix()
-        if self.saddle_point is not None:
+        if self.saddle_point is not None:  # the preconditioner's set-up: factorisation's time
+            start = time.perf_counter()
             self.saddle_point.augment_matrix(self.A)
+            self.timings.factorisation += time.perf_counter() - start
         if self.positive_definite:
             # MUMPS then factorises L L^T, without pivoting (read at the first factorisation)
             self.A.setOption(PETSc.Mat.Option.SPD, True)
@@ -104,9 +109,11 @@ class LinearSolver(LinearProblem):
             super().solve_system(x, b)
             return
         b = self.b if b is None else b
+        start = time.perf_counter()  # the augmentation, scaling and multigrid set-up
         self.saddle_point.augment_vector(b)
         self.saddle_point.scale(self.A, b, x)
         self.saddle_point.configure(self.ksp)
+        self.timings.factorisation += time.perf_counter() - start
         try:
             super().solve_system(x, b)
         except LinearSolveError:
@@ -115,7 +122,9 @@ class LinearSolver(LinearProblem):
                 f"iterations (reason {self.ksp.getConvergedReason()}); solver.linear = \"direct\" "
                 "solves the same system by MUMPS") from None
         finally:
+            start = time.perf_counter()
             self.saddle_point.unscale(self.A, b, x)
+            self.timings.factorisation += time.perf_counter() - start
 
     def follow(self, increment: float) -> None:
         """The next iterative solve's relative residual from the nonlinear iteration's last
