@@ -100,7 +100,7 @@ class AugmentedSaddlePoint:
         comm = space.mesh.comm
         self.gamma = gamma
         velocity_dofs, (velocity, order) = owned_subspace(space, 0)
-        pressure_dofs, _ = owned_subspace(space, 1)
+        pressure_dofs, (pressure, self._pressure_order) = owned_subspace(space, 1)
         self.velocity = PETSc.IS().createGeneral(velocity_dofs.astype(PETSc.IntType), comm=comm)
         self.velocity.setBlockSize(space.mesh.geometry.dim)
         self.pressure = PETSc.IS().createGeneral(pressure_dofs.astype(PETSc.IntType), comm=comm)
@@ -116,9 +116,12 @@ class AugmentedSaddlePoint:
         self.modes: PETSc.NullSpace | None = None  # in the scaled unknowns (scale)
         self._ksp: PETSc.KSP | None = None
         self._scale: PETSc.Vec | None = None  # S
-        p, q = ufl.TrialFunctions(space)[1], ufl.TestFunctions(space)[1]
+        # M_eta on the pressure space alone (its cells' blocks; on the mixed space the matrix would
+        # have the whole system's pattern, and cost as much to assemble as the flow's)
+        p, q = ufl.TrialFunction(pressure), ufl.TestFunction(pressure)
         self._weight = dolfinx.fem.form(3.0 / secant * p * q * dx)
         self._weight_matrix = dolfinx.fem.petsc.create_matrix(self._weight)
+        self._weight_diagonal = self._weight_matrix.createVecLeft()
         # the Schur preconditioner -D/(1 + gamma) scaled by S^2 (scale): -1 on the pressure dofs
         sizes = (len(pressure_dofs), PETSc.DECIDE)
         self.schur = PETSc.Mat().createAIJ((sizes, sizes), nnz=1, comm=comm)
@@ -138,8 +141,9 @@ class AugmentedSaddlePoint:
         M.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(M, self._weight)
         M.assemble()
-        M.createSubMatrix(self.pressure, self.pressure).getDiagonal(self._inverse)
-        self._inverse.reciprocal()
+        M.getDiagonal(self._weight_diagonal)
+        # the pressure space's owned dofs in the order of the system's (the index set's)
+        self._inverse.array[:] = 1.0 / self._weight_diagonal.array[self._pressure_order]
         if self._B is None:  # -(q, div u) does not change with the state
             self._B = A.createSubMatrix(self.pressure, self.rows)
         if self._scaled is None:
@@ -236,8 +240,8 @@ class AugmentedSaddlePoint:
             self.velocity_iterations += 1
 
     def destroy(self) -> None:
-        for item in (self._weight_matrix, self.schur, self._inverse, self._B, self._scaled,
-                     self._product, self.modes, self._scale, self.velocity, self.pressure,
-                     self.rows, self.multigrid):
+        for item in (self._weight_matrix, self._weight_diagonal, self.schur, self._inverse,
+                     self._B, self._scaled, self._product, self.modes, self._scale, self.velocity,
+                     self.pressure, self.rows, self.multigrid):
             if item is not None:
                 item.destroy()
