@@ -46,7 +46,8 @@ def iterative(problem: FlowProblem) -> bool:
 def saddle_point_of(problem: FlowProblem) -> AugmentedSaddlePoint:
     """The iterative solver's augmentation of the problem's mixed system, weighted by its secant
     coefficient."""
-    return AugmentedSaddlePoint(problem.system_space, problem.secant_coefficient(), problem.dx)
+    return AugmentedSaddlePoint(problem.system_space, problem.secant_coefficient(), problem.dx,
+                                collapsed=problem.fields.collapsed)
 
 
 class LinearSolver(LinearProblem):
