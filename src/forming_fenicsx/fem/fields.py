@@ -38,13 +38,11 @@ def collapse_vector(sub: dolfinx.fem.FunctionSpace, mesh, degree: int
 
 class FlowFields:
     """Spaces and functions: ``solution`` (what a linear system solves for), the velocity ``u`` and
-    (mixed) the ``pressure``; ``bcs`` the Dirichlet conditions of the system; ``collapsed`` (mixed)
-    the velocity and pressure spaces, each with its dofs' indices in the system space."""
+    (mixed) the ``pressure``; ``bcs`` the Dirichlet conditions of the system."""
 
     def __init__(self, mesh, facet_tags, constraints, degree: int, mixed: bool):
         self.mesh, self.facet_tags, self.mixed = mesh, facet_tags, mixed
         self.pressure = None
-        self.collapsed: list[tuple[dolfinx.fem.FunctionSpace, np.ndarray]] | None = None
         if mixed:
             self.system_space = mixed_space(mesh, degree, "DPC", 1)
             self.solution = dolfinx.fem.Function(self.system_space)
@@ -52,8 +50,6 @@ class FlowFields:
             pressure_space, self._pressure_dofs = self.system_space.sub(1).collapse()
             self.pressure = dolfinx.fem.Function(pressure_space, name="pressure")
             self.u = dolfinx.fem.Function(self.V, name="velocity")
-            self.collapsed = [(self.V, self._velocity_dofs),
-                              (pressure_space, self._pressure_dofs)]
         else:
             self.V = self.system_space = function_space(mesh, "P", degree, (mesh.geometry.dim,))
             self.u = self.solution = dolfinx.fem.Function(self.V, name="velocity")
@@ -68,6 +64,15 @@ class FlowFields:
         if self.mixed:
             self.u.x.array[:] = self.solution.x.array[self._velocity_dofs]
             self.pressure.x.array[:] = self.solution.x.array[self._pressure_dofs]
+
+    @property
+    def collapsed(self) -> list[tuple[dolfinx.fem.FunctionSpace, np.ndarray]] | None:
+        """(mixed) The velocity and pressure spaces, each with its dofs' indices in the system
+        space (None for the penalty formulation)."""
+        if not self.mixed:
+            return None
+        return [(self.V, self._velocity_dofs),
+                (self.pressure.function_space, self._pressure_dofs)]
 
     @property
     def unknowns(self) -> int:
