@@ -41,7 +41,7 @@ def test_iterative_agrees_with_direct():
     """A 4 x 6 -> 3.2 x 5 mm bar, 8 degrees, mu = 0.05, law (4.5), Newton on a 1 mm mesh (3147
     unknowns): the iterative solves take the run through the same Newton steps to the same answer,
     the drawing stress, die pressure and forces within 1e-6 of MUMPS' (measured for the drawing
-    stress: 7e-8 on 1 rank, 3.3e-7 on 2), with the Krylov iterations counted per step."""
+    stress: 2.8e-8 on 1 rank, 2.1e-8 on 2), with the Krylov iterations counted per step."""
     direct, direct_krylov = _solved("direct")
     iterative, krylov = _solved("iterative")
     assert iterative["converged"] and direct["converged"]
@@ -147,9 +147,10 @@ def test_p_multigrid_interpolates_into_the_velocity_block():
 def test_p_multigrid_velocity_iterations_per_newton_step():
     """The bar on the 1.2 and 1 mm meshes, one application of the velocity block's preconditioner
     per outer iteration: with the p-multigrid (the default) at most 75 per Newton step (measured
-    at most 49 on 1 rank, 53 on 2), more than 1.5 times fewer than with GAMG on the Q2 block
-    (measured 108 to 122, 2.0 to 2.3 times the p-multigrid's); the answers agree within the
-    stated 1e-5 (measured 1.4e-7 to 2.9e-7 with dolfinx 0.5, 1.0e-6 with 0.9: at the default
+    at most 54 on 1 rank, 55 on 2), more than 1.3 times fewer than with GAMG on the Q2 block
+    (measured 79 to 87, 1.49 to 1.63 times the p-multigrid's; 2.0 to 2.3 times with gamma = 10
+    before stop 46); the answers agree within the stated 1e-5 (measured 1.4e-7 to 8.8e-7 with
+    dolfinx 0.5, 1.0e-6 with 0.9 before stop 46: at the default
     solver.tolerance the contact multiplier's window lets the two preconditioners' paths settle
     apart by more than their solves' error, docs/iterative_solver.md)."""
     gamg = {"fieldsplit_u_pc_type": "gamg"}
@@ -164,6 +165,6 @@ def test_p_multigrid_velocity_iterations_per_newton_step():
                      if not math.isnan(record.residual)]
             rows[name] = (summary, max(steps))
         assert rows["mg"][0]["converged"] and rows["mg"][1] < 75, (size, rows["mg"][1])
-        assert rows["gamg"][1] > 1.5 * rows["mg"][1], (size, rows["gamg"][1], rows["mg"][1])
+        assert rows["gamg"][1] > 1.3 * rows["mg"][1], (size, rows["gamg"][1], rows["mg"][1])
         assert rows["mg"][0]["drawing_stress"] == pytest.approx(
             rows["gamg"][0]["drawing_stress"], rel=1e-5)
