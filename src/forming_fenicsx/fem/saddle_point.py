@@ -231,7 +231,10 @@ class AugmentedSaddlePoint:
     def _set_up(self, ksp: PETSc.KSP) -> None:
         pc = ksp.getPC()
         pc.setFieldSplitIS(("u", self.velocity), ("p", self.pressure))
-        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)
+        options = PETSc.Options(ksp.getOptionsPrefix())
+        if options.getString("pc_fieldsplit_schur_precondition", "user") == "user":
+            # -D/(1 + gamma), unless solver.petsc_options chose another (e.g. "selfp")
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur)
         ksp.setUp()  # the fieldsplit's, not yet its blocks' preconditioners
         block = pc.getFieldSplitSubKSP()[0]
         block.setMonitor(self._count)
