@@ -28,9 +28,10 @@ KRYLOV_FLOOR = 1e-3
 KRYLOV_CEILING = 1e-5
 # solver.linear = "auto" solves a 3D mixed problem of at least this many unknowns iteratively: on
 # one rank the iterative solver was slower than MUMPS at every size both solved (3k to 40k unknowns,
-# 1.3 to 1.8 times), on two it overtook MUMPS only near 92k; MUMPS' memory, extrapolated (N^1.27),
-# reaches this machine's 24 GiB near 700k unknowns, where the iterative solver's, 15 GB at 925k,
-# still fits (docs/iterative_solver.md)
+# 1.2 to 1.6 times), on two it overtook MUMPS near 92k (twice as fast at 277k), and on a thin
+# section it was 7 times slower (18k unknowns); MUMPS' memory, extrapolated (N^1.27), reaches this
+# machine's 24 GiB near 700k unknowns, where the iterative solver's, 13.8 GB at 1.05M, still fits
+# (docs/iterative_solver.md)
 ITERATIVE_FROM = 500_000
 
 
