@@ -13,6 +13,7 @@ from typing import Any, Callable
 import dolfinx
 from mpi4py import MPI
 
+from forming_fenicsx.app.free_surface import solve_free_surface, surface_lines
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.core.units import DIMENSIONS
 from forming_fenicsx.coupled.coupling import coupled_problem
@@ -23,8 +24,8 @@ from forming_fenicsx.io.figure import Heading
 from forming_fenicsx.io.maps import write_figures
 from forming_fenicsx.io.maps3d import write_maps_3d
 from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_profile,
-                                       write_exit_profile, write_fields, write_history,
-                                       write_summary)
+                                       write_exit_profile, write_fields, write_free_surface,
+                                       write_history, write_summary)
 from forming_fenicsx.io.profile_plot import write_exit_profile_plot
 from forming_fenicsx.io.section_plot import write_section_plot
 from forming_fenicsx.mesh.geometry import build_mesh
@@ -179,7 +180,15 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                      ) -> dict[str, Any]:
     """Solve the scene (once, or on finer meshes to accuracy.target) and write every file of the
     run into ``out``; returns the summary."""
-    if scene.accuracy.target is None:
+    shape = None
+    if scene.free_surface.update:
+        if restart is not None:
+            raise ValueError("--restart starts one run on the same mesh; free_surface.update "
+                             "re-meshes the workpiece at each update: give one or the other")
+        problem, result, summary, shape = solve_free_surface(
+            scene, lambda previous, generate: solve_scene(
+                scene, petsc_options, comm, stop, previous=previous, generate=generate), comm)
+    elif scene.accuracy.target is None:
         problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
     else:
         if restart is not None:
@@ -201,6 +210,9 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         if comm.rank == 0:
             write_die_faces(faces, list(stresses), out / "die.png", heading, scene)
             write_maps_3d(planes, profile, out, heading, scene.units)
+    elif scene.output.figures and shape is not None:
+        write_figures(problem, out, heading, profile, scene.geometry.profile().polyline(),
+                      surface_lines(shape))
     elif scene.output.figures:
         write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
@@ -228,6 +240,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                                     DIMENSIONS.get(key, ""), scene.units, reference)
     if comm.rank == 0:
         write_die_profile(out / "die.csv", profile, scene.units)
+        if shape is not None:
+            write_free_surface(out / "free_surface.csv", surface_lines(shape), scene.units)
         if scene.output.figures and not three_d:
             write_die_plot(profile, out / "die.png", heading, scene)
         write_history(out / "history.csv", result.history)

@@ -11,8 +11,8 @@ from forming_fenicsx.config.coercion import build_section, key_name
 from forming_fenicsx.config.geometry import geometry_class
 from forming_fenicsx.config.materials import build_material
 from forming_fenicsx.config.scene import Scene
-from forming_fenicsx.config.sections import (PROCESSES, Accuracy, Discretisation, Friction, Output,
-                                             Penalty, Process, Solver, Thermal)
+from forming_fenicsx.config.sections import (PROCESSES, Accuracy, Discretisation, FreeSurface,
+                                             Friction, Output, Penalty, Process, Solver, Thermal)
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import Units
 
@@ -28,7 +28,7 @@ PROCESS_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
 }
 # The sections a scene may have (thermal only when it computes the temperature)
 SECTIONS = ("process", "geometry", "material", "friction", "penalty", "discretisation", "solver",
-            "output", "units", "thermal", "accuracy")
+            "output", "units", "thermal", "accuracy", "free_surface")
 
 
 def scene_from_dict(data: dict[str, Any]) -> Scene:
@@ -51,7 +51,8 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     process.check()
     classes = {"geometry": geometry_class(kind, tables["geometry"]), "friction": Friction,
                "penalty": Penalty, "discretisation": Discretisation, "solver": Solver,
-               "output": Output, "units": Units, "accuracy": Accuracy}
+               "output": Output, "units": Units, "accuracy": Accuracy,
+               "free_surface": FreeSurface}
     built = {name: build_section(cls, tables[name], name, defaults.get(name))
              for name, cls in classes.items()}
     if "thermal" in data:  # heat transfer only when the scene asks for it

@@ -24,8 +24,8 @@ from forming_fenicsx.config.geometry import (ConicalExtrusionGeometry, DrawingGe
                                              ExtrusionGeometry)
 from forming_fenicsx.config.materials import SOLIDUS
 from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, Accuracy, Discretisation,
-                                             Friction, Output, Penalty, Process, Scales, Solver,
-                                             Thermal)
+                                             FreeSurface, Friction, Output, Penalty, Process,
+                                             Scales, Solver, Thermal)
 from forming_fenicsx.config.strain_profile import check_section, read_strain_profile
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import Units
@@ -55,6 +55,7 @@ class Scene:
     units: Units = field(default_factory=Units)
     thermal: Thermal | None = None  # only when the scene has [thermal]
     accuracy: Accuracy = field(default_factory=Accuracy)
+    free_surface: FreeSurface = field(default_factory=FreeSurface)
 
     def resolve(self) -> None:
         """Turn the values left out or given relative into absolute ones, in the order they depend
@@ -147,6 +148,7 @@ class Scene:
                 and container != (thermal.die_h, thermal.die_temperature):
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
+        self._check_free_surface()
         quantities = ACCURACY_QUANTITIES[self.process.kind]
         if self.accuracy.quantity is None:
             self.accuracy.quantity = quantities[0]
@@ -158,6 +160,24 @@ class Scene:
                              "must be <= the thinnest half-thickness "
                              f"({self.geometry.thinnest}) so that at least one element spans it; "
                              f"got {self.discretisation.mesh_size}")
+
+    def _check_free_surface(self) -> None:
+        """The free-surface update re-meshes the built-in 2D workpiece of a profiled die."""
+        if not self.free_surface.update:
+            return
+        g = self.geometry
+        if g.three_dimensional:
+            raise SceneError("geometry.symmetry", "the free-surface update is 2D for now (plane "
+                             "strain or axisymmetric); a 3D model keeps the drawn surfaces")
+        if g.mesh_file is not None:
+            raise SceneError("geometry.mesh_file", "a user's mesh has no geometry to move: the "
+                             "free-surface update re-meshes the built-in workpiece")
+        if getattr(g, "die", "") == "square":
+            raise SceneError("geometry.die", "the free-surface update follows a profiled die "
+                             '(die = "conical"); the square die\'s product is not moved yet')
+        if self.accuracy.target is not None:
+            raise SceneError("accuracy.target", "accuracy on demand and the free-surface update "
+                             "are not combined yet: give one or the other")
 
     @property
     def reference_strain_rate(self) -> float:

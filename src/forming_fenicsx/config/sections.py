@@ -384,3 +384,24 @@ class Accuracy:
         if not 3 <= self.max_levels <= 12:
             raise SceneError("accuracy.max_levels", "must be an integer in [3, 12] (three meshes "
                              f"give the first estimate); got {self.max_levels}")
+
+
+@dataclass
+class FreeSurface:
+    """The free surfaces as the flow decides them (app/free_surface.py, docs/free_surface.md): with
+    ``update``, the flow solve alternates with a surface update that makes the free surfaces
+    streamlines (v.n = 0) and moves where the contact with the die starts and ends, until the
+    surface moves by less than ``tolerance`` times the exit half-size or ``max_updates`` updates
+    are made. Off by default: the fixed domain the scene draws (the paper's model)."""
+
+    update: bool = False
+    tolerance: float = 1e-3
+    max_updates: int = 8
+
+    def check(self) -> None:
+        if not 0 < self.tolerance < 0.1:
+            raise SceneError("free_surface.tolerance", "must lie in (0, 0.1) (the largest move of "
+                             f"the surface over the exit half-size); got {self.tolerance}")
+        if not 1 <= self.max_updates <= 50:
+            raise SceneError("free_surface.max_updates",
+                             f"must be an integer in [1, 50]; got {self.max_updates}")

@@ -196,10 +196,13 @@ def rate_cells(outlines: np.ndarray, rate: np.ndarray, largest: float) -> Any:
 
 
 def write_figures(problem: FlowProblem, directory: Path, heading: Heading,
-                  profile: dict | None) -> list[Path]:
+                  profile: dict | None, die_wall: np.ndarray | None = None,
+                  surfaces: dict[str, np.ndarray] | None = None) -> list[Path]:
     """velocity.png (flow lines and time lines), strain_rate.png and, with [thermal],
     temperature.png, each over the process window with the die drawn (collective: every rank
-    gathers, rank 0 draws; ``profile``: die_profile's, on rank 0)."""
+    gathers, rank 0 draws; ``profile``: die_profile's, on rank 0). ``die_wall``: the whole die
+    wall (N, 2) where Gamma3 is only its part in contact (a free-surface run), and ``surfaces``
+    the free surfaces found, drawn in velocity.png."""
     cells = _gather_cells(problem)
     nodes = _gather_nodes(nodal_velocity(problem), FLOW_TRIANGLES)
     field = problem.field("temperature")
@@ -208,10 +211,16 @@ def write_figures(problem: FlowProblem, directory: Path, heading: Heading,
         return []
     outlines, rate = cells
     units = problem.scene.units
-    frame = Frame.of_run(outlines, rate, np.column_stack([profile["x"], profile["y"]]), units)
+    wall = np.column_stack([profile["x"], profile["y"]]) if die_wall is None else die_wall
+    frame = Frame.of_run(outlines, rate, wall, units)
 
     fig, ax = frame.axes()
     draw_flow_lines(ax, outlines, nodes)
+    for number, line in enumerate((surfaces or {}).values()):
+        ax.plot(line[:, 0], line[:, 1], color="tab:red", linewidth=1.6, zorder=4,
+                label="free surface (a streamline)" if number == 0 else None)
+    if surfaces:
+        ax.legend(loc="lower left", fontsize="small")
     paths = [frame.finish(fig, ax, directory / "velocity.png", heading, FLOW_LINES)]
 
     fig, ax = frame.axes()

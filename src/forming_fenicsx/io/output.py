@@ -98,6 +98,17 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
             writer.writerow([f"{value:.8g}" for value in row])
 
 
+def write_free_surface(path: Path, lines: dict[str, np.ndarray], units: Units) -> None:
+    """free_surface.csv: the free surfaces' points (x, y and which surface: "stock" before the die,
+    "product" after it), from the entry face to the exit face."""
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow([units.column("x"), units.column("y"), "surface"])
+        for name, points in lines.items():
+            for x, y in points:
+                writer.writerow([f"{x:.10g}", f"{y:.10g}", name])
+
+
 def write_exit_profile(path: Path, profile: dict, name: str, units: Units) -> None:
     """exit_<quantity>.csv: y across the product (and z over a 3D product's exit section) and the
     quantity ``name`` (the ``values`` of exit_profiles.exit_profile or exit_strain_profile, or

@@ -22,6 +22,7 @@ from forming_fenicsx.config.mesh_file import gmsh_session, open_msh
 from forming_fenicsx.core.roles import ROLES, WORKPIECE
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.mesh.bar3d import rectangular_bar, round_bar
+from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape
 from forming_fenicsx.mesh.grading import graded_edge
 
 
@@ -56,12 +57,13 @@ class Edge:
 def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
                 blocks: list[list[str]], groups: dict[str, list[str]],
                 arcs: dict[str, tuple[float, float]] | None = None,
-                structured: bool = True) -> None:
+                structured: bool = True, splines: dict[str, np.ndarray] | None = None) -> None:
     """Add transfinite, recombined blocks to the current gmsh model (not transfinite unless
     ``structured``: the surfaces for a size field, mesh/adapted.py).
 
     A block is four edge names around it counter-clockwise; a leading '-' reverses an edge. An edge
-    named in ``arcs`` is the circular arc about the centre given there, else a line.
+    named in ``arcs`` is the circular arc about the centre given there, one in ``splines`` the
+    spline through the points given there between its ends (a free surface), else a line.
     """
     geo = gmsh.model.geo
     point_tags = {name: geo.addPoint(x, y, 0.0) for name, (x, y) in points.items()}
@@ -70,6 +72,9 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
         if arcs and name in arcs:
             centre = geo.addPoint(*arcs[name], 0.0)
             tag = geo.addCircleArc(point_tags[edge.start], centre, point_tags[edge.end])
+        elif splines and name in splines:
+            inner = [geo.addPoint(x, y, 0.0) for x, y in splines[name]]
+            tag = geo.addSpline([point_tags[edge.start], *inner, point_tags[edge.end]])
         else:
             tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
         if structured:
@@ -131,7 +136,7 @@ def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, lis
     return {"gamma1_velocity": list(driven), loaded: list(other)}
 
 
-def _profiled(scene: Scene, structured: bool = True) -> None:
+def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = None) -> None:
     """A workpiece through a profiled die (Example 2's strip, a drawn bar, a conical extrusion).
 
     Blocks along x: before the die [0, x0] (under a free surface for drawing, the container wall
@@ -139,14 +144,18 @@ def _profiled(scene: Scene, structured: bool = True) -> None:
     then the product [x_n, L], with the same number of elements through the thickness. The ends of
     the first and last blocks are graded toward the die entry and exit (corner_grading); with
     wall_grading > 1 each die segment is two blocks graded toward its ends (the corners where the
-    wall's slope changes) and the thickness is graded toward the die wall.
+    wall's slope changes) and the thickness is graded toward the die wall. A ``shape``
+    (free_shape.py) replaces the scene's top boundary: its free surfaces are splines, its wall
+    the part of the die in contact.
     """
     g, disc = scene.geometry, scene.discretisation
-    h0, h1, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.length
+    h0, L = 0.5 * g.entry_thickness, g.length
+    shape = fixed_shape(scene) if shape is None else shape
     size, grade = disc.mesh_size, disc.corner_grading
-    pieces = _wall_pieces(g.profile().segments, size, disc.wall_grading)
+    pieces = _wall_pieces(shape.wall.segments, size, disc.wall_grading)
     n_y, r_y = graded_edge(h0, size, disc.wall_grading, toward_end=True)
-    tops = [(0.0, h0), *(piece.start for piece, _ in pieces), pieces[-1][0].end, (L, h1)]
+    tops = [(0.0, h0), *(piece.start for piece, _ in pieces), pieces[-1][0].end,
+            (L, shape.exit_height)]
     n_in, r_in = graded_edge(tops[1][0], size, grade, toward_end=True)
     n_out, r_out = graded_edge(L - tops[-2][0], size, grade, toward_end=False)
     counts = [(n_in, r_in)] + [count for _, count in pieces] + [(n_out, r_out)]
@@ -168,7 +177,10 @@ def _profiled(scene: Scene, structured: bool = True) -> None:
     groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
     groups["gamma3_contact"] = wall
     groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
-    _add_blocks(points, edges, blocks, groups, arcs, structured)
+    free = {f"top{last - 1}": shape.downstream,
+            **({"top0": shape.upstream} if shape.upstream is not None else {})}
+    splines = {name: line[1:-1] for name, line in free.items() if len(line) > 2}
+    _add_blocks(points, edges, blocks, groups, arcs, structured, splines)
 
 
 def _wall_pieces(segments: list[Segment], size: float, grading: float
@@ -209,6 +221,17 @@ def add_model(scene: Scene, structured: bool = True) -> None:
         _builder(scene)(scene)
     else:
         _builder(scene)(scene, structured=False)
+
+
+def shaped_mesh(scene: Scene, shape: FreeShape) -> Callable[[], None]:
+    """A generator for build_mesh: the scene's profiled workpiece with the top boundary ``shape``
+    (free_shape.py), meshed by the scene's blocks."""
+    def generate() -> None:
+        gmsh.model.add(scene.process.kind)
+        _profiled(scene, shape=shape)
+        mesh_model(2, scene.discretisation.degree)
+
+    return generate
 
 
 def mesh_model(dim: int, degree: int) -> None:

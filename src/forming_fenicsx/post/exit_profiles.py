@@ -13,6 +13,7 @@ from ufl.core.expr import Expr
 
 from forming_fenicsx.core.compat import cell_geometry_nodes, colliding_cells
 from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.post.product import product_half_size
 from forming_fenicsx.post.sections import values_at
 from forming_fenicsx.post.streamlines import streamline_strain
 
@@ -25,9 +26,12 @@ LAYER_POINTS = 8
 
 def exit_section(problem: FlowProblem, points: int) -> tuple[float, np.ndarray]:
     """The product's section half an exit thickness before the workpiece's end, x, and ``points``
-    heights on it from the axis to the surface (the last a hair inside)."""
-    g = problem.scene.geometry
-    return g.length - 0.5 * g.thinnest, np.linspace(0.0, g.thinnest * (1 - 1e-9), points)
+    heights on it from the axis to the surface (the product's half-size at its end,
+    product.product_half_size; the last a hair inside, more so under a free surface, whose
+    spline the isoparametric cells follow to about 1e-7 of the size)."""
+    g, half = problem.scene.geometry, product_half_size(problem)
+    inside = 1e-6 if problem.scene.free_surface.update else 1e-9
+    return g.length - 0.5 * g.thinnest, np.linspace(0.0, half * (1 - inside), points)
 
 
 def exit_profile(problem: FlowProblem, field: Expr, points: int = 41) -> dict[str, Any] | None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import ufl
+from mpi4py import MPI
 
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.physics.closed_forms import central_burst_indicator
@@ -51,6 +52,16 @@ def section_areas(problem: FlowProblem) -> dict[str, float]:
         areas[key] = problem.coordinates.whole * integrate(
             problem, ufl.conditional(inside, 1.0, 0.0) * problem.ds)
     return areas
+
+
+def product_half_size(problem: FlowProblem) -> float:
+    """A 2D product's half-size (radius) at the workpiece's downstream end: the top of its end
+    face (the die's exit size on the scene's domain, where the free surface ends after an
+    update, app/free_surface.py)."""
+    x = problem.mesh.geometry.x
+    end = problem.comm.allreduce(x[:, 0].max(), op=MPI.MAX)
+    at_end = x[:, 0] >= end - 1e-12 * abs(end)
+    return problem.comm.allreduce(x[at_end, 1].max(initial=0.0), op=MPI.MAX)
 
 
 def product_flow_stress(problem: FlowProblem) -> float:

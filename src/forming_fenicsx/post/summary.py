@@ -14,17 +14,18 @@ from forming_fenicsx.post.forces import die_separation_force, force_balance, who
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
 from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
-                                          product_flow_stress, section_areas)
+                                          product_flow_stress, product_half_size, section_areas)
 from forming_fenicsx.post.ram_face import mean_hydrostatic_pressure
 
 
 def exit_section(problem: FlowProblem) -> float:
     """The area the drawing force acts on: the model's exit section (the half-thickness per unit
-    width, pi R^2, or a 3D model's part of the section, integrated over Gamma1)."""
+    width, pi R^2, or a 3D model's part of the section, integrated over Gamma1); in 2D of the
+    product's half-size at the exit face (the die's exit size, or where a free surface ends)."""
     c = problem.coordinates
     if c.three_dimensional:
         return integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
-    return c.section(problem.scene.geometry.thinnest)
+    return c.section(product_half_size(problem))
 
 
 def scalars(problem: FlowProblem) -> dict[str, float]:

@@ -1,0 +1,88 @@
+"""The free surfaces the flow decides: the flow solved on the scene's domain, then alternately the
+surface made of streamlines of the last flow (post/free_surface.py) and the flow solved again on
+the workpiece re-meshed under it (mesh/geometry.shaped_mesh), started from the last velocity
+interpolated onto the new mesh (mesh/transfer.py), until the surface moves by less than
+free_surface.tolerance times the exit half-size (docs/free_surface.md)."""
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any, Callable
+
+import dolfinx.fem
+import numpy as np
+from mpi4py import MPI
+
+from forming_fenicsx.config.scene import Scene
+from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape, wall_area
+from forming_fenicsx.mesh.geometry import shaped_mesh
+from forming_fenicsx.post.free_surface import shape_change, updated_shape
+from forming_fenicsx.solvers.records import SolveResult
+
+log = logging.getLogger(__name__)
+
+Solve = Callable[["dolfinx.fem.Function | None", "Callable[[], None] | None"],
+                 tuple[FlowProblem, SolveResult, dict[str, Any]]]
+
+
+def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
+                       ) -> tuple[FlowProblem, SolveResult, dict[str, Any], FreeShape]:
+    """Alternate ``solve(previous, generate)`` (run.solve_scene on the mesh ``generate`` makes,
+    started from ``previous``) with the surface update (module docstring). Returns the last
+    solve's problem, iteration and summary, the summary with a ``free_surface`` table, and the
+    shape the last solve had."""
+    settings = scene.free_surface
+    h1 = 0.5 * scene.geometry.exit_thickness
+    start = time.perf_counter()
+    shape = fixed_shape(scene)
+    problem, result, summary = solve(None, None)
+    updates: list[dict[str, Any]] = []
+    solves, moved, converged = summary["linear_solves"], 0, False
+    while summary["iteration_converged"]:
+        new = updated_shape(problem, shape)
+        move = shape_change(shape, new, scene.geometry.length) / h1
+        updates.append({"linear_solves": summary["linear_solves"],
+                        "free_surface_crossing": summary["free_surface_crossing"],
+                        **shape_scalars(scene, shape), "surface_move": move})
+        if comm.rank == 0:
+            log.info("free surface after %d updates: crossing %.3g %%, the next update moves it "
+                     "%.3g of the exit half-size", moved, 100 * summary["free_surface_crossing"],
+                     move)
+        converged = move < settings.tolerance
+        if converged or moved == settings.max_updates:
+            break
+        shape, moved = new, moved + 1
+        problem, result, summary = solve(problem.u, shaped_mesh(scene, shape)
+                                         if comm.rank == 0 else None)
+        solves += summary["linear_solves"]
+    summary["free_surface"] = {
+        "converged": converged, "updates": moved, "tolerance": settings.tolerance,
+        **shape_scalars(scene, shape), "history": updates, "linear_solves": solves,
+        "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX)}
+    if not converged and summary["converged"]:
+        summary["warnings"].append(
+            f"the free surface did not settle in free_surface.max_updates = "
+            f"{settings.max_updates} updates (the last moved it {updates[-1]['surface_move']:.3g} "
+            f"of the exit half-size, tolerance {settings.tolerance:g}): the shape and the "
+            "forces are those of the last update")
+    summary["die_contact_fraction"] *= (wall_area(shape.wall, scene.geometry.axisymmetric)
+                                        / wall_area(scene.geometry.profile(),
+                                                    scene.geometry.axisymmetric))
+    return problem, result, summary, shape
+
+
+def shape_scalars(scene: Scene, shape: FreeShape) -> dict[str, float]:
+    """The product's exit size (full thickness or diameter) and its change from the die's exit
+    size, and where the contact with the die starts and ends."""
+    g = scene.geometry
+    size = f"exit_{g.thickness_name}"
+    return {size: 2 * shape.exit_height,
+            f"{size}_change": shape.exit_height / (0.5 * g.exit_thickness) - 1,
+            "contact_start_x": shape.wall.start[0], "contact_end_x": shape.wall.end[0]}
+
+
+def surface_lines(shape: FreeShape) -> dict[str, np.ndarray]:
+    """The free surfaces by name: "stock" before the die (drawing), "product" after it."""
+    lines = {} if shape.upstream is None else {"stock": shape.upstream}
+    return {**lines, "product": shape.downstream}

@@ -1,0 +1,90 @@
+"""The top boundary of a 2D workpiece whose free surfaces the flow decides (app/free_surface.py):
+from the entry face, a free surface (drawing: the stock before the die), the die wall where the
+workpiece touches it (from where contact starts to where it ends), then the product's free surface
+to the exit face. mesh/geometry.py meshes it as the scene's own blocks, the free surfaces as
+splines through their points.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from forming_fenicsx.config.die_profile import DieProfile, Segment
+from forming_fenicsx.config.scene import Scene
+
+
+@dataclass(frozen=True)
+class FreeShape:
+    """``upstream`` (N, 2): the free surface from the entry face x = 0 to the die (None where the
+    stock runs in a container, extrusion); ``wall``: the die wall in contact; ``downstream``
+    (M, 2): the product's free surface from the end of contact to the exit face x = L."""
+
+    upstream: np.ndarray | None
+    wall: DieProfile
+    downstream: np.ndarray
+
+    def height(self, x: np.ndarray) -> np.ndarray:
+        """The top boundary's y at x (along the free surfaces and the wall)."""
+        parts = [self.wall.polyline(48)]
+        if self.upstream is not None:
+            parts.insert(0, self.upstream)
+        parts.append(self.downstream)
+        line = np.vstack(parts)
+        keep = np.concatenate([[True], np.diff(line[:, 0]) > 0])
+        return np.interp(x, line[keep, 0], line[keep, 1])
+
+    @property
+    def exit_height(self) -> float:
+        """The product's half-size at the exit face."""
+        return float(self.downstream[-1, 1])
+
+
+def fixed_shape(scene: Scene) -> FreeShape:
+    """The scene's own top boundary: the stock level at the entry size up to the die (drawing),
+    the whole die wall, the product level at the exit size after it."""
+    g = scene.geometry
+    profile = g.profile()
+    h0, h1 = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness
+    upstream = (None if scene.process.kind == "extrusion"
+                else np.array([(0.0, h0), profile.start]))
+    return FreeShape(upstream, profile, np.array([profile.end, (g.length, h1)]))
+
+
+def wall_height(profile: DieProfile, x: float) -> float:
+    """The die wall's y at x, extended level beyond its ends."""
+    x = min(max(x, profile.start[0]), profile.end[0])
+    return profile.radius_at(x)
+
+
+def clipped(profile: DieProfile, start: float, end: float, snap: float) -> DieProfile:
+    """The die wall from x = ``start`` to x = ``end``, the ends moved onto a corner of the wall
+    (where segments meet) within ``snap`` of it, so that no piece is much shorter than an
+    element."""
+    corners = [s.start[0] for s in profile.segments] + [profile.end[0]]
+
+    def snapped(x: float) -> float:
+        nearest = min(corners, key=lambda c: abs(c - x))
+        return nearest if abs(nearest - x) <= snap else x
+
+    start, end = snapped(start), snapped(end)
+    pieces = []
+    for segment in profile.segments:
+        a, b = max(segment.start[0], start), min(segment.end[0], end)
+        if b - a <= 1e-12 * max(abs(b), 1.0):
+            continue
+        pieces.append(Segment((a, profile.radius_at(a)), (b, profile.radius_at(b)),
+                              segment.centre))
+    return DieProfile(tuple(pieces))
+
+
+def wall_area(profile: DieProfile, axisymmetric: bool, per_segment: int = 200) -> float:
+    """The die wall's length (plane strain) or its area over 2 pi (the integral of y ds,
+    axisymmetric), by the trapezoidal rule on ``per_segment`` points of each segment."""
+    total = 0.0
+    for segment in profile.segments:
+        points = segment.points(per_segment)
+        ds = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        weight = 0.5 * (points[1:, 1] + points[:-1, 1]) if axisymmetric else 1.0
+        total += float(np.sum(weight * ds))
+    return total
