@@ -21,6 +21,7 @@ from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.post.free_surface import slope_field, streamline
+from forming_fenicsx.post.sanity import free_surfaces
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 ROD = DEMOS / "aluminium_rod_cold.toml"
@@ -135,3 +136,13 @@ def test_the_square_die_is_refused_by_name():
     assert error.value.key == "geometry.die"
     assert math.isfinite(load_scene(EXAMPLE2).free_surface.tolerance)
     assert not load_scene(EXAMPLE2).free_surface.update
+
+
+def test_the_crossing_warning_names_the_update_where_it_applies():
+    """A crossing above 5 % of the throughput warns; on a profiled 2D die without the update the
+    message says that free_surface.update moves the product's surface, on the square die not."""
+    drawing = free_surfaces({"free_surface_crossing": 0.08}, load_scene(EXAMPLE2))
+    square = free_surfaces({"free_surface_crossing": 0.08},
+                           load_scene(DEMOS / "example1_extrusion.toml"))
+    assert "free_surface.update = true" in drawing.message and not drawing.failure
+    assert "free_surface.update" not in square.message

@@ -83,6 +83,5 @@ def shape_scalars(scene: Scene, shape: FreeShape) -> dict[str, float]:
 
 
 def surface_lines(shape: FreeShape) -> dict[str, np.ndarray]:
-    """The free surfaces by name: "stock" before the die (drawing), "product" after it."""
-    lines = {} if shape.upstream is None else {"stock": shape.upstream}
-    return {**lines, "product": shape.downstream}
+    """The free surfaces found, by name: "product", after the die (the stock's is as drawn)."""
+    return {"product": shape.downstream}

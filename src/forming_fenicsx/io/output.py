@@ -99,8 +99,8 @@ def write_die_profile(path: Path, profile: dict, units: Units) -> None:
 
 
 def write_free_surface(path: Path, lines: dict[str, np.ndarray], units: Units) -> None:
-    """free_surface.csv: the free surfaces' points (x, y and which surface: "stock" before the die,
-    "product" after it), from the entry face to the exit face."""
+    """free_surface.csv: the free surfaces' points (x, y and which surface: "product" after the
+    die), each from upstream to downstream."""
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow([units.column("x"), units.column("y"), "surface"])

@@ -178,7 +178,18 @@ def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "domain (2.6): the real free surface lies elsewhere and the forces are those "
                    "of another shape. Usual causes: the product yields after the die, the die "
                    "leaves a gap the fixed domain ignores, or a coarse mesh (the crossing falls "
-                   "like the mesh size: refine discretisation.mesh_size)")
+                   "like the mesh size: refine discretisation.mesh_size)" + _update_hint(scene))
+
+
+def _update_hint(scene: Scene) -> str:
+    """Where the free-surface update applies and is off: that it can move the product's
+    surface."""
+    g = scene.geometry
+    if scene.free_surface.update or g.three_dimensional or g.mesh_file is not None \
+            or getattr(g, "die", "") == "square":
+        return ""
+    return ("; free_surface.update = true makes the product's surface a streamline of the flow "
+            "(docs/free_surface.md)")
 
 
 def die_contact(summary: dict[str, Any], scene: Scene) -> Finding | None:
