@@ -86,11 +86,12 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
 def test_a_domain_whose_surfaces_are_streamlines_is_kept():
     """The same rod with its 2 mm bearing: the product leaves the bearing level, the first
     update would move the surface by 4.2e-4 of the radius, and the scene's domain is the answer
-    (no update, the fixed run's numbers; crossing 1.7e-6)."""
+    (no update, the fixed run's numbers: two solves of one scene differ by 3e-12 under Debian 13;
+    crossing 1.7e-6)."""
     fixed = solve_scene(_rod(2.0, update=False))[2]
     _, _, summary, shape = _solve(_rod(2.0))
     assert summary["free_surface"]["updates"] == 0 and summary["free_surface"]["converged"]
-    assert summary["ram_pressure"] == fixed["ram_pressure"]
+    assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=1e-9)  # 3e-12 in D13
     assert shape.exit_height == 6.0 and summary["free_surface_crossing"] < 1e-4
 
 
