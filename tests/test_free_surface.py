@@ -75,6 +75,7 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
     assert -0.009 < table["exit_diameter_change"] < -0.004
     assert summary["free_surface_crossing"] < 0.5 * history[0]["free_surface_crossing"]
     assert history[-1]["surface_move"] < scene.free_surface.tolerance
+    assert all(row["wall_time_s"] > 0 for row in history) and len(history) == 2
     assert table["contact_end_x"] == pytest.approx(scene.geometry.die_exit)
     assert shape.downstream[0] == pytest.approx(scene.geometry.profile().end)
     # the product narrows within an element of the corner, then runs level (to 2e-8 of 6 mm)

@@ -43,6 +43,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         new = updated_shape(problem, shape)
         move = shape_change(shape, new, scene.geometry.length) / h1
         updates.append({"linear_solves": summary["linear_solves"],
+                        "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],
                         **shape_scalars(scene, shape), "surface_move": move})
         if comm.rank == 0:
