@@ -40,7 +40,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     updates: list[dict[str, Any]] = []
     solves, moved, converged = summary["linear_solves"], 0, False
     while summary["iteration_converged"]:
-        new = updated_shape(problem, shape)
+        new = updated_shape(problem, shape, summary["contact_end_x"])
         move = shape_change(shape, new, scene.geometry.length) / h1
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],

@@ -19,23 +19,22 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+import dolfinx.fem
 import numpy as np
 
 from forming_fenicsx.config.die_profile import DieProfile
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.free_shape import FreeShape, clipped, wall_height
 from forming_fenicsx.mesh.points import PointValues
-from forming_fenicsx.post.die import die_profile
 
 STEPS_PER_CELL = 4
 # contact ends within this fraction of an element of a wall corner are moved onto it
 SNAP = 0.5
 
 
-def slope_field(problem_u) -> Callable[[np.ndarray], np.ndarray]:
-    """dy/dx = v_y/v_x of a velocity (a vector Function) at points (N, 2) given as the column x
-    and y: returns a column of slopes (collective)."""
-    values = PointValues([problem_u])
+def slope_field(u: dolfinx.fem.Function) -> Callable[[np.ndarray], np.ndarray]:
+    """dy/dx = v_y/v_x of a 2D velocity at points (N, 2): a column of slopes (collective)."""
+    values = PointValues([u])
 
     def slope(xy: np.ndarray) -> np.ndarray:
         v, _ = values.evaluate(np.atleast_2d(xy), outside="extend")
@@ -75,21 +74,7 @@ def streamline(slope: Callable[[np.ndarray], np.ndarray], start: tuple[float, fl
     return np.column_stack([xs, ys]), on_wall
 
 
-def contact_span(problem: FlowProblem) -> tuple[float, float]:
-    """x of the first and the last node of the die (Gamma3) with positive contact pressure
-    (post/die.die_profile), on every rank; the wall's ends without contact."""
-    profile = die_profile(problem)
-    span = None
-    if profile is not None:
-        pressure = profile["contact_pressure"]
-        pressed = np.flatnonzero(pressure > 1e-9 * max(pressure.max(), 1e-300))
-        x = profile["x"]
-        span = ((float(x[pressed].min()), float(x[pressed].max())) if len(pressed)
-                else (float(x.min()), float(x.max())))
-    return problem.comm.bcast(span, root=0)
-
-
-def updated_shape(problem: FlowProblem, shape: FreeShape) -> FreeShape:
+def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
     with the die ends (module docstring); ``shape``'s stock surface and contact start are kept.
     Collective (every rank returns the same shape)."""
@@ -97,8 +82,7 @@ def updated_shape(problem: FlowProblem, shape: FreeShape) -> FreeShape:
     g = scene.geometry
     die = g.profile()
     size = scene.discretisation.mesh_size
-    _, end = contact_span(problem)
-    end = min(max(end, shape.wall.start[0]), die.end[0])
+    end = min(max(contact_end_x, shape.wall.start[0]), die.end[0])
     line, last = streamline(slope_field(problem.u), (end, wall_height(die, end)), g.length,
                             size / STEPS_PER_CELL, die)
     if last is not None and last > end + size:  # the product would enter the die after an
