@@ -9,6 +9,7 @@ import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.app.bench import compare, median_run, run_case
+from forming_fenicsx.app.bench_free_surface import free_surface_bench, free_surface_table
 
 
 def test_run_case_in_process_gives_a_full_row():
@@ -76,3 +77,19 @@ def test_compare_axisymmetric_against_plane_strain():
             for s, t in (("plane_strain", 2.0), ("axisymmetric", 2.5))]
     compare(rows)
     assert rows[1]["time_vs_plane_strain"] == 1.25 and rows[0]["time_vs_plane_strain"] is None
+
+
+def test_free_surface_bench_pairs_each_scene_fixed_and_free():
+    """`forming bench --free-surface` on Example 2 (mu = 0), launched in this process: the fixed
+    run's 14 solves, the free run's one update and 15 solves, the strip 1.5 % under the land; the
+    table holds both rows with their ratios (the whole bench: 1.89 to 2.00 times the scene's wall
+    time on one rank, docs/free_surface.md)."""
+    def launch(case, ranks):
+        return run_case(case)
+
+    rows = free_surface_bench(1, 1, launch, median_run, ("Example 2, mu = 0",))
+    fixed, free = rows
+    assert fixed["linear_solves"] == 14 and free["updates"] == 1 and free["linear_solves"] == 15
+    assert free["size_change"] == pytest.approx(-0.0153, abs=1e-3)
+    assert free["solves_vs_fixed"] == pytest.approx(15 / 14) and free["time_vs_fixed"] > 1
+    assert "| Example 2, mu = 0 | " in free_surface_table(rows)

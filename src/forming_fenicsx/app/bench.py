@@ -18,6 +18,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from forming_fenicsx.app.bench_free_surface import (free_surface_bench, free_surface_table,
+                                                    run_free_surface_case)
 from forming_fenicsx.app.bench_scale import (DEFAULT_SCALE_SIZES, growth_exponents,
                                              peak_memory_mb, run_scale_case, scale_bench,
                                              scale_table)
@@ -49,6 +51,8 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
     """Solve one case in this process (all ranks) and return its row (on every rank)."""
     if case.get("scale"):
         return run_scale_case(case)
+    if case.get("free_surface"):
+        return run_free_surface_case(case)
     from mpi4py import MPI
 
     from forming_fenicsx.app.run import solve_scene
@@ -230,6 +234,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="the hardening scenes instead of the examples: each coupled and "
                              "with the flow stress frozen at its mean (the first --ranks and "
                              "--sizes; h 0.06 mm)")
+    parser.add_argument("--free-surface", action="store_true",
+                        help="scenes on their own domain and with the free-surface update: the "
+                             "update's cost (the first --ranks)")
     parser.add_argument("--scale", action="store_true",
                         help="a 3D bar on --sizes (default 1.0 0.7 0.5 mm) and --ranks, solved "
                              "by each --linear solver: time, memory and Krylov iterations "
@@ -255,6 +262,10 @@ def main(argv: list[str] | None = None) -> int:
         rows = scale_bench(args.sizes or DEFAULT_SCALE_SIZES, args.ranks, args.linear, _launch)
         print(scale_table(rows))
         return _write(Path(args.out), rows + [{"growth": growth_exponents(rows)}])
+    if args.free_surface:
+        rows = free_surface_bench(args.ranks[0], args.repeat, _launch, median_run)
+        print(free_surface_table(rows))
+        return _write(Path(args.out), rows)
     if args.hardening:
         rows = hardening_bench(args.ranks[0], (args.sizes or [0.06])[0], args.repeat)
         print(hardening_table(rows))
