@@ -20,6 +20,7 @@ from typing import Any
 
 from forming_fenicsx.app.bench_free_surface import (free_surface_bench, free_surface_table,
                                                     run_free_surface_case)
+from forming_fenicsx.app.bench_pairs import median_run, pair_rows, timed_pair
 from forming_fenicsx.app.bench_scale import (DEFAULT_SCALE_SIZES, growth_exponents,
                                              peak_memory_mb, run_scale_case, scale_bench,
                                              scale_table)
@@ -107,19 +108,10 @@ def hardening_bench(ranks: int, mesh_size: float, repeat: int) -> list[dict[str,
         first = _launch(case, ranks)
         frozen_case = {**case, "material": {"law": "rate_power", "A": first["mean_flow_stress"],
                                             "n": 1e-3}}
-        _launch(frozen_case, ranks)
-        pairs = [(_launch(case, ranks), _launch(frozen_case, ranks)) for _ in range(repeat)]
-        coupled, frozen = (median_run([pair[k] for pair in pairs]) for k in (0, 1))
-        # the time ratio: the median of the pairs' (each pair run back to back)
-        ratios = sorted(c["wall_time_s"] / f["wall_time_s"] for c, f in pairs)
-        for row, kind, runs in ((coupled, "strain transported", ratios),
-                                (frozen, "frozen at the mean", [1.0])):
-            rows.append({**row, "flow_stress": kind, "time_vs_frozen": runs[(len(runs) - 1) // 2],
-                         "time_ratio_runs": runs,
-                         "solves_vs_frozen": row["linear_solves"] / frozen["linear_solves"]})
-        print(f"{name}: {coupled['linear_solves']} solves {coupled['wall_time_s']:.2f} s coupled, "
-              f"{frozen['linear_solves']} solves {frozen['wall_time_s']:.2f} s frozen, time ratios "
-              + ", ".join(f"{r:.2f}" for r in ratios), flush=True)
+        coupled, frozen, ratios = timed_pair(case, frozen_case, ranks, repeat, _launch)
+        rows += [{**row, "flow_stress": kind} for row, kind in zip(
+            pair_rows(name, coupled, frozen, ratios, ("coupled", "frozen"), "frozen"),
+            ("strain transported", "frozen at the mean"))]
     return rows
 
 
@@ -132,14 +124,6 @@ def hardening_table(rows: list[dict[str, Any]]) -> str:
           r["linear_solves"], f"{r['wall_time_s']:.2f}", _spread(r["wall_time_runs_s"]),
           f"{r['value']:.5g}", f"{r['mean_flow_stress'] or float('nan'):.5g}",
           f"{r['solves_vs_frozen']:.2f}", f"{r['time_vs_frozen']:.2f}"] for r in rows])
-
-
-def median_run(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """The run of median wall time (the lower middle one of an even count), with every run's wall
-    time: on a shared machine one run's time is a sample, not a measurement."""
-    ordered = sorted(runs, key=lambda row: row["wall_time_s"])
-    return {**ordered[(len(ordered) - 1) // 2],
-            "wall_time_runs_s": [row["wall_time_s"] for row in runs]}
 
 
 def _launch(case: dict[str, Any], ranks: int) -> dict[str, Any]:
@@ -263,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
         print(scale_table(rows))
         return _write(Path(args.out), rows + [{"growth": growth_exponents(rows)}])
     if args.free_surface:
-        rows = free_surface_bench(args.ranks[0], args.repeat, _launch, median_run)
+        rows = free_surface_bench(args.ranks[0], args.repeat, _launch)
         print(free_surface_table(rows))
         return _write(Path(args.out), rows)
     if args.hardening:

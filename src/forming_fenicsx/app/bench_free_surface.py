@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Callable
 
+from forming_fenicsx.app.bench_pairs import Row, pair_rows, timed_pair
 from forming_fenicsx.core.report import markdown_table
 
 DEMOS = Path(__file__).resolve().parents[3] / "demos"
@@ -53,31 +54,16 @@ def run_free_surface_case(case: dict[str, Any]) -> dict[str, Any]:
             "value": summary[quantity], "crossing": summary["free_surface_crossing"], **extra}
 
 
-Row = dict[str, Any]
-
-
 def free_surface_bench(ranks: int, repeat: int, launch: Callable[[Row, int], Row],
-                       median_run: Callable[[list[Row]], Row],
                        names: tuple[str, ...] = tuple(SCENES)) -> list[Row]:
-    """Each scene named fixed and free, a first pair not counted (it compiles the forms), then
-    ``repeat`` pairs back to back (``launch``: bench._launch); the rows of median wall time
-    (``median_run``: bench.median_run) with the median of the pairs' time ratios."""
+    """Each scene named fixed and free, timed against each other (bench_pairs.timed_pair); the
+    rows of median wall time with the median of the pairs' time ratios."""
     rows = []
     for name in names:
         fixed_case, free_case = ({"free_surface": name, "update": update}
                                  for update in (False, True))
-        launch(fixed_case, ranks), launch(free_case, ranks)
-        pairs = [(launch(fixed_case, ranks), launch(free_case, ranks)) for _ in range(repeat)]
-        fixed, free = (median_run([pair[k] for pair in pairs]) for k in (0, 1))
-        ratios = sorted(f["wall_time_s"] / d["wall_time_s"] for d, f in pairs)
-        for row in (fixed, free):
-            rows.append({**row, "time_vs_fixed": row["wall_time_s"] / fixed["wall_time_s"]
-                         if row is fixed else ratios[(len(ratios) - 1) // 2],
-                         "time_ratio_runs": ratios if row is free else [1.0],
-                         "solves_vs_fixed": row["linear_solves"] / fixed["linear_solves"]})
-        print(f"{name}: {fixed['linear_solves']} solves {fixed['wall_time_s']:.2f} s fixed, "
-              f"{free['linear_solves']} solves {free['wall_time_s']:.2f} s free, time ratios "
-              + ", ".join(f"{r:.2f}" for r in ratios), flush=True)
+        free, fixed, ratios = timed_pair(free_case, fixed_case, ranks, repeat, launch)
+        rows += reversed(pair_rows(name, free, fixed, ratios, ("free", "fixed"), "fixed"))
     return rows
 
 
