@@ -252,6 +252,16 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                  key.replace("_", " "), summary[key], f" {unit}" if unit else "",
                  summary["force_balance_residual"], summary["linear_solves"],
                  summary["wall_time_s"])
+        if "free_surface" in summary:
+            surface = summary["free_surface"]
+            size = next(k for k in surface if k.startswith("exit_") and not k.endswith("_change"))
+            log.info("free surface: %s after %d updates, the product's %s %.6g (%+.3g %% from the "
+                     "die's), contact from x = %.5g to %.5g, crossing %.3g %%, %d linear solves, "
+                     "%.1f s", "settled" if surface["converged"] else "not settled",
+                     surface["updates"], size.replace("_", " "), surface[size],
+                     100 * surface[f"{size}_change"], surface["contact_start_x"],
+                     surface["contact_end_x"], 100 * summary["free_surface_crossing"],
+                     surface["linear_solves"], surface["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]
             which = ("finest mesh" if accuracy["answer"] != "extrapolated" else
