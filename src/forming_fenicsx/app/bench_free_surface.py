@@ -44,7 +44,7 @@ def run_free_surface_case(case: dict[str, Any]) -> dict[str, Any]:
         table = summary["free_surface"]
         solves, wall = table["linear_solves"], table["wall_time_s"]
         extra = {"updates": table["updates"], "settled": table["converged"],
-                 "size_change": next(v for k, v in table.items() if k.endswith("_change"))}
+                 "size_change": table[f"exit_{scene.geometry.thickness_name}_change"]}
     else:
         summary = solve_scene(scene)[2]
         solves, wall, extra = summary["linear_solves"], summary["wall_time_s"], {}

@@ -17,10 +17,14 @@ def median_run(runs: list[Row]) -> Row:
 
 
 def timed_pair(first: Row, second: Row, ranks: int, repeat: int,
-               launch: Callable[[Row, int], Row]) -> tuple[Row, Row, list[float]]:
+               launch: Callable[[Row, int], Row], first_warm: bool = False
+               ) -> tuple[Row, Row, list[float]]:
     """The median runs of ``first`` and ``second`` over ``repeat`` pairs (after one pair not
-    counted) and the pairs' time ratios first/second, sorted."""
-    launch(first, ranks), launch(second, ranks)
+    counted; only ``second`` not counted when ``first`` has run already, ``first_warm``) and the
+    pairs' time ratios first/second, sorted."""
+    if not first_warm:
+        launch(first, ranks)
+    launch(second, ranks)
     pairs = [(launch(first, ranks), launch(second, ranks)) for _ in range(repeat)]
     one, other = (median_run([pair[k] for pair in pairs]) for k in (0, 1))
     return one, other, sorted(a["wall_time_s"] / b["wall_time_s"] for a, b in pairs)

@@ -254,7 +254,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                  summary["wall_time_s"])
         if "free_surface" in summary:
             surface = summary["free_surface"]
-            size = next(k for k in surface if k.startswith("exit_") and not k.endswith("_change"))
+            size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key
             log.info("free surface: %s after %d updates, the product's %s %.6g (%+.3g %% from the "
                      "die's), contact from x = %.5g to %.5g, crossing %.3g %%, %d linear solves, "
                      "%.1f s", "settled" if surface["converged"] else "not settled",

@@ -1,8 +1,8 @@
-"""The top boundary of a 2D workpiece whose free surfaces the flow decides (app/free_surface.py):
-from the entry face, a free surface (drawing: the stock before the die), the die wall where the
-workpiece touches it (from where contact starts to where it ends), then the product's free surface
-to the exit face. mesh/geometry.py meshes it as the scene's own blocks, the free surfaces as
-splines through their points.
+"""The top boundary of a 2D workpiece whose product surface the flow decides
+(app/free_surface.py): the die wall where the workpiece touches it, from where contact starts to
+where it ends, then the product's free surface to the exit face. The stock's surface before the die
+(drawing) and the container (extrusion) stay as the scene draws them. mesh/geometry.py meshes it as
+the scene's own blocks, the product's surface a spline through its points.
 """
 from __future__ import annotations
 
@@ -16,21 +16,16 @@ from forming_fenicsx.config.scene import Scene
 
 @dataclass(frozen=True)
 class FreeShape:
-    """``upstream`` (N, 2): the free surface from the entry face x = 0 to the die (None where the
-    stock runs in a container, extrusion); ``wall``: the die wall in contact; ``downstream``
-    (M, 2): the product's free surface from the end of contact to the exit face x = L."""
+    """``wall``: the die wall in contact; ``downstream`` (M, 2): the product's free surface from
+    the end of contact to the exit face x = L."""
 
-    upstream: np.ndarray | None
     wall: DieProfile
     downstream: np.ndarray
 
     def height(self, x: np.ndarray) -> np.ndarray:
-        """The top boundary's y at x (along the free surfaces and the wall)."""
-        parts = [self.wall.polyline(48)]
-        if self.upstream is not None:
-            parts.insert(0, self.upstream)
-        parts.append(self.downstream)
-        line = np.vstack(parts)
+        """The top boundary's y at x along the wall and the product's surface (the wall's start
+        height before it)."""
+        line = np.vstack([self.wall.polyline(48), self.downstream])
         keep = np.concatenate([[True], np.diff(line[:, 0]) > 0])
         return np.interp(x, line[keep, 0], line[keep, 1])
 
@@ -41,14 +36,11 @@ class FreeShape:
 
 
 def fixed_shape(scene: Scene) -> FreeShape:
-    """The scene's own top boundary: the stock level at the entry size up to the die (drawing),
-    the whole die wall, the product level at the exit size after it."""
+    """The scene's own top boundary: the whole die wall, the product level at the exit size after
+    it."""
     g = scene.geometry
     profile = g.profile()
-    h0, h1 = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness
-    upstream = (None if scene.process.kind == "extrusion"
-                else np.array([(0.0, h0), profile.start]))
-    return FreeShape(upstream, profile, np.array([profile.end, (g.length, h1)]))
+    return FreeShape(profile, np.array([profile.end, (g.length, 0.5 * g.exit_thickness)]))
 
 
 def wall_height(profile: DieProfile, x: float) -> float:

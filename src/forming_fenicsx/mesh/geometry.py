@@ -145,8 +145,8 @@ def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = N
     the first and last blocks are graded toward the die entry and exit (corner_grading); with
     wall_grading > 1 each die segment is two blocks graded toward its ends (the corners where the
     wall's slope changes) and the thickness is graded toward the die wall. A ``shape``
-    (free_shape.py) replaces the scene's top boundary: its free surfaces are splines, its wall
-    the part of the die in contact.
+    (free_shape.py) replaces the die wall by its part in contact and the product's surface by a
+    spline.
     """
     g, disc = scene.geometry, scene.discretisation
     h0, L = 0.5 * g.entry_thickness, g.length
@@ -177,9 +177,8 @@ def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = N
     groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
     groups["gamma3_contact"] = wall
     groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
-    free = {f"top{last - 1}": shape.downstream,
-            **({"top0": shape.upstream} if shape.upstream is not None else {})}
-    splines = {name: line[1:-1] for name, line in free.items() if len(line) > 2}
+    product = shape.downstream
+    splines = {f"top{last - 1}": product[1:-1]} if len(product) > 2 else None
     _add_blocks(points, edges, blocks, groups, arcs, structured, splines)
 
 

@@ -76,7 +76,7 @@ def streamline(slope: Callable[[np.ndarray], np.ndarray], start: tuple[float, fl
 
 def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
-    with the die ends (module docstring); ``shape``'s stock surface and contact start are kept.
+    with the die ends (module docstring); ``shape``'s contact start is kept.
     Collective (every rank returns the same shape)."""
     scene = problem.scene
     g = scene.geometry
@@ -91,7 +91,7 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) 
         line = line[line[:, 0] >= end]
     wall = clipped(die, shape.wall.start[0], end, SNAP * size)
     downstream = np.vstack([wall.end, line[line[:, 0] > wall.end[0] + 1e-9 * size]])
-    return FreeShape(shape.upstream, wall, downstream)
+    return FreeShape(wall, downstream)
 
 
 def shape_change(old: FreeShape, new: FreeShape, length: float, points: int = 2001) -> float:
