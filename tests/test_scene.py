@@ -111,7 +111,7 @@ BAD = [
     ({"process": {"velocity": float("nan")}}, "process.velocity", "finite"),
     ({"process": {"colour": "red"}}, "process.colour", "unknown key"),
     ({"processes": {}}, "processes", "unknown section"),
-    ({"process": {"kind": "rolling"}}, "process.kind", "extrusion"),
+    ({"process": {"kind": "forging"}}, "process.kind", "extrusion"),
     ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 0.0}},
      "geometry.die_angle", "(0, 90)"),
     ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}},

@@ -27,6 +27,7 @@ from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_p
                                        write_exit_profile, write_fields, write_free_surface,
                                        write_history, write_summary)
 from forming_fenicsx.io.profile_plot import write_exit_profile_plot
+from forming_fenicsx.io.roll_plot import write_roll_plot
 from forming_fenicsx.io.section_plot import write_section_plot
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.mesh.transfer import transfer
@@ -242,16 +243,23 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_die_profile(out / "die.csv", profile, scene.units)
         if shape is not None:
             write_free_surface(out / "free_surface.csv", surface_lines(shape), scene.units)
-        if scene.output.figures and not three_d:
+        if scene.output.figures and scene.process.kind == "rolling":
+            write_roll_plot(profile, out / "rolls.png", heading, scene, summary["neutral_x"])
+        elif scene.output.figures and not three_d:
             write_die_plot(profile, out / "die.png", heading, scene)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
-        key = "ram_pressure" if scene.process.kind == "extrusion" else "drawing_stress"
-        unit = scene.units.label("stress")
+        key = {"extrusion": "ram_pressure", "drawing": "drawing_stress",
+               "rolling": "roll_force"}[scene.process.kind]
+        unit = scene.units.summary([key], scene.geometry.whole_forces).get(key, "")
         log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s",
                  key.replace("_", " "), summary[key], f" {unit}" if unit else "",
                  summary["force_balance_residual"], summary["linear_solves"],
                  summary["wall_time_s"])
+        if scene.process.kind == "rolling":
+            log.info("rolls: torque %.5g, neutral point %.3g deg (x = %.5g), forward slip %.3g %%, "
+                     "entry speed %.5g", summary["roll_torque"], summary["neutral_angle"],
+                     summary["neutral_x"], 100 * summary["forward_slip"], summary["entry_speed"])
         if "free_surface" in summary:
             surface = summary["free_surface"]
             size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from forming_fenicsx.config.die_profile import (DieProfile, parametric_profile, polyline_profile,
                                                 read_profile_csv)
@@ -441,18 +441,3 @@ class ConicalExtrusionGeometry(_ProfiledDie):
     PAPER: ClassVar[dict[str, float]] = {"length": 23.5, "entry_thickness": 10.0,
                                          "exit_thickness": 5.0, "die_angle": 45.0,
                                          "land_length": 1.0, "die_entry": 10.0}
-
-
-# The geometry of each process and geometry.die (the first is the default)
-GEOMETRIES = {"extrusion": {"square": ExtrusionGeometry, "conical": ConicalExtrusionGeometry},
-              "drawing": {"conical": DrawingGeometry}}
-
-
-def geometry_class(kind: str, table: dict[str, Any]) -> type:
-    """The geometry class that geometry.die names for the process."""
-    dies = GEOMETRIES[kind]
-    die = table.get("die", next(iter(dies)))
-    if not isinstance(die, str) or die not in dies:
-        raise SceneError("geometry.die",
-                         f"must be one of {', '.join(dies)} for {kind}; got {die!r}")
-    return dies[die]

@@ -22,8 +22,10 @@ from typing import Any
 
 from forming_fenicsx.config.geometry import (ConicalExtrusionGeometry, DrawingGeometry,
                                              ExtrusionGeometry)
+from forming_fenicsx.config.roll_gap import RollingGeometry
 from forming_fenicsx.config.materials import SOLIDUS
-from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, Accuracy, Discretisation,
+from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, ROLLING_D_N_RELATIVE,
+                                             ROLLING_D_T_RELATIVE, Accuracy, Discretisation,
                                              FreeSurface, Friction, Output, Penalty, Process,
                                              Scales, Solver, Thermal)
 from forming_fenicsx.config.strain_profile import check_section, read_strain_profile
@@ -34,7 +36,7 @@ from forming_fenicsx.physics.flow_laws import FlowLaw
 
 # The default mesh size over the exit half-thickness: about 5 elements across it (Example 1's 0.5),
 # 15 for drawing (Example 2's 0.05)
-MESH_SIZE_RELATIVE = {"extrusion": 0.2, "drawing": 1 / 15}
+MESH_SIZE_RELATIVE = {"extrusion": 0.2, "drawing": 1 / 15, "rolling": 0.125}
 # a 3D model's default: 4 elements across its thinnest half-size (its unknowns grow with the cube
 # of the refinement; docs/three_d.md measures the mesh error)
 MESH_SIZE_RELATIVE_3D = 0.25
@@ -45,7 +47,7 @@ class Scene:
     """One run, fully specified (after :meth:`resolve`, every value absolute)."""
 
     process: Process
-    geometry: ExtrusionGeometry | ConicalExtrusionGeometry | DrawingGeometry
+    geometry: ExtrusionGeometry | ConicalExtrusionGeometry | DrawingGeometry | RollingGeometry
     material: FlowLaw
     friction: Friction
     penalty: Penalty
@@ -83,8 +85,12 @@ class Scene:
             raise SceneError("material", f"gives the flow stress {scales.flow_stress} at the "
                              f"process strain rate {scales.strain_rate:.6g}: it must be a finite "
                              "number > 0")
-        self.penalty.resolve(scales)
-        self.friction.resolve(scales)
+        if self.process.kind == "rolling":
+            self.penalty.resolve(scales, ROLLING_D_N_RELATIVE)
+            self.friction.resolve(scales, ROLLING_D_T_RELATIVE)
+        else:
+            self.penalty.resolve(scales)
+            self.friction.resolve(scales)
         relative = (MESH_SIZE_RELATIVE_3D if self.geometry.three_dimensional
                     else MESH_SIZE_RELATIVE[self.process.kind])
         self.discretisation.resolve(self.geometry.thinnest, relative)
@@ -149,6 +155,14 @@ class Scene:
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
         self._check_free_surface()
+        law = self.friction
+        if self.process.kind == "rolling" and (law.m if law.law == "factor" else law.mu) <= 0:
+            key = "friction.m" if law.law == "factor" else "friction.mu"
+            raise SceneError(key, "must be > 0 for rolling: the rolls draw the strip in by "
+                             "friction alone, and a frictionless bite has no steady state")
+        if self.process.kind == "rolling" and self.accuracy.target is not None:
+            raise SceneError("accuracy.target", "accuracy on demand does not run rolling scenes "
+                             "yet: refine discretisation.mesh_size and compare")
         quantities = ACCURACY_QUANTITIES[self.process.kind]
         if self.accuracy.quantity is None:
             self.accuracy.quantity = quantities[0]
@@ -166,6 +180,9 @@ class Scene:
         if not self.free_surface.update:
             return
         g = self.geometry
+        if self.process.kind == "rolling":
+            raise SceneError("free_surface.update", "rolling's strip leaves the rigid rolls at "
+                             "the roll gap: the update is for drawing and extrusion dies")
         if g.three_dimensional:
             raise SceneError("geometry.symmetry", "the free-surface update is 2D for now (plane "
                              "strain or axisymmetric); a 3D model keeps the drawn surfaces")

@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.relative import check_positive, set_pair
 
-PROCESSES = ("extrusion", "drawing")
+PROCESSES = ("extrusion", "drawing", "rolling")
 
 
 @dataclass
@@ -23,12 +23,17 @@ class Process:
 
     ``drive`` says where the velocity is prescribed: "pull" at the exit face (drawing), "push" at
     the entry face (extrusion's ram). F_N acts on the other end face, which is free without it.
+
+    Rolling: ``velocity`` is the rolls' surface speed and the strip's speed is the problem's; the
+    end faces carry the ``back_tension`` (entry) and ``front_tension`` (exit), stresses >= 0.
     """
 
     kind: str = "extrusion"
     velocity: float = 1.0
     applied_force: float | None = None
     drive: str = "push"
+    back_tension: float = 0.0
+    front_tension: float = 0.0
 
     def check(self) -> None:
         if self.kind not in PROCESSES:
@@ -42,6 +47,16 @@ class Process:
                              f"must be a finite number; got {self.applied_force}")
         if self.drive not in ("push", "pull"):
             raise SceneError("process.drive", f"must be one of push, pull; got {self.drive!r}")
+        for key in ("back_tension", "front_tension"):
+            value = getattr(self, key)
+            if self.kind != "rolling" and value != 0:
+                raise SceneError(f"process.{key}", "applies to rolling; a drawn or extruded "
+                                 "product's end load is process.applied_force")
+            if not (math.isfinite(value) and value >= 0):
+                raise SceneError(f"process.{key}", f"must be a finite stress >= 0; got {value}")
+        if self.kind == "rolling" and self.applied_force is not None:
+            raise SceneError("process.applied_force", "does not apply to rolling: its end faces "
+                             "carry process.back_tension and process.front_tension")
 
 
 NORMAL_STRESSES = ("averaged", "local")
@@ -50,6 +65,10 @@ NORMAL_STRESSES = ("averaged", "local")
 D_RELATIVE = 1e-4
 D_N_RELATIVE = 1e-3
 D_T_RELATIVE = 1e-6
+# rolling's (docs/rolling.md): its pure-penalty contact is stiffer, and its slip regularisation
+# wider, which Newton needs at the neutral point (the roll force moves by 0.02 %)
+ROLLING_D_N_RELATIVE = 1e-4
+ROLLING_D_T_RELATIVE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -85,8 +104,8 @@ class Friction:
     normal_stress: str = "averaged"
     mollification_length: float | None = None
 
-    def resolve(self, scales: Scales) -> None:
-        set_pair("friction", self, "d_T", scales.velocity, D_T_RELATIVE)
+    def resolve(self, scales: Scales, d_T_relative: float = D_T_RELATIVE) -> None:
+        set_pair("friction", self, "d_T", scales.velocity, d_T_relative)
 
     def check(self) -> None:
         if self.law not in FRICTION_LAWS:
@@ -125,9 +144,9 @@ class Penalty:
     d_N_relative: float | None = None
     augmented: bool = True
 
-    def resolve(self, scales: Scales) -> None:
+    def resolve(self, scales: Scales, d_N_relative: float = D_N_RELATIVE) -> None:
         set_pair("penalty", self, "d", scales.strain_rate / scales.flow_stress, D_RELATIVE)
-        set_pair("penalty", self, "d_N", scales.velocity / scales.flow_stress, D_N_RELATIVE)
+        set_pair("penalty", self, "d_N", scales.velocity / scales.flow_stress, d_N_relative)
 
     def check(self) -> None:
         for key in ("d", "d_N"):
@@ -351,7 +370,8 @@ class Thermal:
 # The summary numbers accuracy on demand can drive, by process; the first is the default
 ACCURACY_QUANTITIES = {
     "extrusion": ("ram_pressure", "ram_force", "die_force_x", "mean_hydrostatic_pressure"),
-    "drawing": ("drawing_stress", "drawing_force", "die_force_x", "mean_die_pressure")}
+    "drawing": ("drawing_stress", "drawing_force", "die_force_x", "mean_die_pressure"),
+    "rolling": ("roll_force", "roll_torque")}
 
 
 @dataclass

@@ -55,7 +55,12 @@ DIMENSIONS = {
     "mean_exit_temperature": "temperature", "max_exit_temperature": "temperature",
     "min_exit_temperature": "temperature", "min_temperature": "temperature",
     "max_temperature": "temperature",
+    "roll_force": "force_per_width", "roll_torque": "torque_per_width",
+    "roll_power": "power_per_width", "entry_speed": "velocity", "exit_speed": "velocity",
+    "neutral_x": "length", "shear_stress": "stress", "slip": "velocity",
 }
+# a quantity per unit width of a strip, and what it is for the strip of a given width
+WHOLE = {"force_per_width": "force", "torque_per_width": "torque", "power_per_width": "power"}
 
 
 def bracketed(text: str, unit: str | None) -> str:
@@ -145,7 +150,8 @@ class Units:
 
     def label(self, dimension: str) -> str | None:
         """The unit of a dimension (length, area, time, stress, force, velocity, strain_rate,
-        force_per_width, temperature), or None when the labels it needs are not given."""
+        force_per_width, torque and power, and each per width, temperature), or None when the
+        labels it needs are not given."""
         length, time, stress, force = self.length, self.time, self.stress, self.force
         if force is None and stress is not None and length is not None:
             force = f"{stress}*{length}^2"
@@ -154,6 +160,11 @@ class Units:
             "velocity": f"{length}/{time}" if length and time else None,
             "strain_rate": f"1/{time}" if time else None,
             "force_per_width": f"{force}/{length}" if force and length else None,
+            "torque": f"{force}*{length}" if force and length else None,
+            "torque_per_width": f"{force}*{length}/{length}" if force and length else None,
+            "power": f"{force}*{length}/{time}" if force and length and time else None,
+            "power_per_width": (f"{force}*{length}/{time}/{length}" if force and length and time
+                                else None),
             "area": f"{length}^2" if length else None,
             "temperature": "K",  # kelvin in every system ([thermal], thermal.py)
         }
@@ -173,7 +184,7 @@ class Units:
         """The dimension of a reported quantity ("" when unknown); ``whole_forces``: the forces
         are forces (a round product's, a strip's of a given width), not per unit width."""
         found = DIMENSIONS.get(key, "")
-        return "force" if whole_forces and found == "force_per_width" else found
+        return WHOLE.get(found, found) if whole_forces else found
 
     def summary(self, keys: list[str], whole_forces: bool = False) -> dict[str, object]:
         """What summary.json says of the units: the labels, and the unit of each reported quantity

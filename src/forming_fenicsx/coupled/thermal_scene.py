@@ -60,7 +60,7 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
         return problem.flow_stress(v) * problem.equivalent_strain_rate(v)
 
     def slip_power(v, T):
-        slip = tangential(v, problem.n)
+        slip = tangential(problem.slip(v), problem.n)
         return problem.friction_coefficient() * ufl.dot(slip, slip)
     friction = None
     if problem.has_friction:

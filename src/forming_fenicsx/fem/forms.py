@@ -14,11 +14,12 @@ import dolfinx.fem.petsc
 import ufl
 from petsc4py import PETSc
 
-from forming_fenicsx.physics import contact, friction
+from forming_fenicsx.physics import contact, friction, roll
 from forming_fenicsx.fem.boundary_filter import BoundaryFilter
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.physics.coordinates import CoordinateSystem
 from forming_fenicsx.fem.contact_multiplier import ContactMultiplier
+from forming_fenicsx.fem.entry_speed import EntrySpeed
 from forming_fenicsx.fem.fields import FlowFields
 from forming_fenicsx.fem.frozen import FrozenCoefficient, FrozenVelocity
 from forming_fenicsx.mesh.geometry import FormingMesh
@@ -123,7 +124,19 @@ class FlowProblem:
         self.has_contact = "gamma3_contact" in self.roles
         law = scene.friction
         self.has_friction = self.has_contact and (law.m if law.law == "factor" else law.mu) > 0
-        self.has_force = "gamma5_force" in self.roles and scene.process.applied_force is not None
+        self.rolling = scene.process.kind == "rolling"
+        process = scene.process
+        self.has_force = ("gamma5_force" in self.roles and process.applied_force is not None) or (
+            self.rolling and (process.back_tension > 0 or process.front_tension > 0))
+        # the die's surface velocity w (rolling's roll, roll.py): friction opposes the slip u - w
+        self.tool_velocity = None
+        if self.rolling:
+            g = scene.geometry
+            self.tool_velocity = roll.surface_velocity(
+                ufl.SpatialCoordinate(mesh), dolfinx.fem.Constant(mesh, PETSc.ScalarType(
+                    g.roll_centre)), dolfinx.fem.Constant(mesh, PETSc.ScalarType(
+                        process.velocity)), dolfinx.fem.Constant(mesh, PETSc.ScalarType(
+                            g.roll_radius)))
         self.multiplier = None  # the augmented contact's lambda (contact.py), or none: pure penalty
         if self.has_contact and scene.penalty.augmented:
             self.multiplier = ContactMultiplier(self.u, self.n, scene.penalty.d_N,
@@ -139,6 +152,14 @@ class FlowProblem:
                     law.mollification_length, "averaged_normal_stress",
                     "normal_stress_filter")
                 self.friction_state.derived.append(self.normal_stress_average)
+        # rolling: the entry speed is the flow's, held at a guess until the first freeze
+        self.entry_speed: EntrySpeed | None = None
+        if self.rolling:
+            g = scene.geometry
+            self.entry_speed = EntrySpeed(mesh, process.velocity * g.exit_thickness
+                                          / g.entry_thickness, 1.0 / scene.penalty.d_N,
+                                          self.ds(ROLES["gamma1_velocity"]))
+            self.frozen.append(self.entry_speed)
 
         if self.mixed:
             (du, dp), (v, q) = (ufl.split(ufl.TrialFunction(self.system_space)),
@@ -242,8 +263,10 @@ class FlowProblem:
     def friction_normal_stress(self):
         """The local normal pressure of the friction bound: the multiplier lambda of the augmented
         contact (the pressure it has converged to, updated with it), else u_N^+/d_N of (3.4) at the
-        friction state."""
-        if self.multiplier is not None:
+        friction state. Rolling reads (lambda + u_N/d_N)^+ at the friction state, which tends to
+        lambda as it converges: its strip is held along x by friction alone (entry_speed.py), from
+        the first iterate on, before lambda is first updated."""
+        if self.multiplier is not None and not self.rolling:
             return self.multiplier.value
         return self.contact_pressure(self.friction_state.state)
 
@@ -264,8 +287,16 @@ class FlowProblem:
 
     def friction_coefficient(self):
         """Slip coefficient tau_f/sqrt(|u_state,T|^2 + d_T^2) of the regularised friction."""
-        return friction.slip_coefficient(self.friction_bound(), self.u_state, self.n,
+        return friction.slip_coefficient(self.friction_bound(), self.slip(self.u_state), self.n,
                                          self.scene.friction.d_T)
+
+    def slip(self, u):
+        """u - w: the velocity relative to the die's surface (u itself for a fixed die)."""
+        return u if self.tool_velocity is None else u - self.tool_velocity
+
+    def friction_traction(self):
+        """The friction stress on the workpiece at u, -c_T (u - w)_T (it opposes the slip)."""
+        return friction.friction_traction(self.friction_coefficient(), self.slip(self.u), self.n)
 
     def _bilinear(self, u, v):
         """b(w; u, v) of (3.5); the mixed formulation adds its pressure terms instead of the
@@ -279,23 +310,38 @@ class FlowProblem:
         if self.has_friction:
             form += friction.friction_form(u, v, self.friction_coefficient(), self.n,
                                            self.ds_contact)
+        if self.entry_speed is not None:
+            form += self.entry_speed.form(u, v)
         return form
 
     def _linear(self, v):
         """The right-hand side of the secant systems: f(v) = int_G5 F_N v_N of (3.2), minus the
-        augmented contact's int lambda v_N over the state's active set; None when there is
-        neither."""
-        form = self.load(v) if self.has_force else None
+        augmented contact's int lambda v_N over the state's active set; a moving die's friction
+        int c_T w_T . v_T and the entry speed's hold (rolling); None when there is none."""
+        terms = [self.load(v)] if self.has_force else []
         if self.multiplier is not None:
-            pressure = contact.multiplier_form(v, self.contact_active(self.u_state),
-                                               self.multiplier.value, self.n, self.ds_contact)
-            form = -pressure if form is None else form - pressure
-        return form
+            terms.append(-contact.multiplier_form(v, self.contact_active(self.u_state),
+                                                  self.multiplier.value, self.n, self.ds_contact))
+        if self.has_friction and self.tool_velocity is not None:
+            terms.append(friction.friction_form(self.tool_velocity, v, self.friction_coefficient(),
+                                                self.n, self.ds_contact))
+        if self.entry_speed is not None:
+            terms.append(self.entry_speed.load(v))
+        return sum(terms[1:], terms[0]) if terms else None
 
     def load(self, v):
-        """f(v) = int_G5 F_N v_N of (3.2)."""
-        F_N = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(self.scene.process.applied_force))
-        return F_N * ufl.dot(v, self.n) * self.ds(ROLES["gamma5_force"])
+        """f(v) = int_G5 F_N v_N of (3.2); rolling's tensions: the back tension t_b on Gamma1 and
+        the front tension t_f on Gamma5, int t_b v_N + int t_f v_N (the outward normals), on once
+        the entry speed is released (entry_speed.py)."""
+        process = self.scene.process
+        if not self.rolling:
+            F_N = dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(process.applied_force))
+            return F_N * ufl.dot(v, self.n) * self.ds(ROLES["gamma5_force"])
+        ends = (("gamma1_velocity", process.back_tension), ("gamma5_force", process.front_tension))
+        terms = [self.entry_speed.released * dolfinx.fem.Constant(
+            self.mesh, PETSc.ScalarType(tension)) * ufl.dot(v, self.n) * self.ds(ROLES[role])
+            for role, tension in ends if tension > 0]
+        return sum(terms[1:], terms[0])
 
     # -- boundary data --------------------------------------------------------------------------
     def boundary_dofs(self, role: str, component: int, space=None):

@@ -129,13 +129,18 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
                                          problem.ds_contact)
     if problem.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
         tau_f, d_T = problem.friction_bound(), scene.friction.d_T
-        others.append(friction.regularised_functional(tau_f, u, problem.n, d_T)
+        others.append(friction.regularised_functional(tau_f, problem.slip(u), problem.n, d_T)
                       * problem.ds_contact)
-        operator += friction.newton_form(du, v, u, tau_f, problem.n, d_T,
-                                         friction.SLOW_SLIP * abs(scene.process.velocity),
+        # rolling: the tangent everywhere; the friction's reversal at the neutral point holds the
+        # strip along x, and the secant there under-steps the entry speed (docs/rolling.md)
+        slow = 0.0 if problem.rolling else friction.SLOW_SLIP * abs(scene.process.velocity)
+        operator += friction.newton_form(du, v, problem.slip(u), tau_f, problem.n, d_T, slow,
                                          problem.ds_contact)
     if problem.has_force:
         others.append(-ufl.action(problem.load(v), w))
+    if problem.entry_speed is not None:  # rolling's hold of the entry speed (zero once released)
+        others.append(problem.entry_speed.energy(u))
+        operator += problem.entry_speed.form(du, v)
     residual = (2.0 / 3.0 * material.secant_ufl(rate(u), problem.strain, problem.temperature)
                 * c.deviatoric_product(e, e_v) * problem.dx)
     energy = flow_energy

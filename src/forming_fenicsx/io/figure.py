@@ -52,7 +52,9 @@ def run_settings(scene: Scene) -> str:
         if not g.round:
             sizes = (f"{g.entry_thickness:.4g} x {g.entry_width:.4g} -> {g.exit_thickness:.4g} x "
                      f"{g.exit_width:.4g}")
-    if getattr(g, "die_angle", None) is None:
+    if scene.process.kind == "rolling":
+        die = f", rolls R = {g.roll_radius:.4g}{unit}, bite {g.die_angle:.3g} deg"
+    elif getattr(g, "die_angle", None) is None:
         die = f", {g.die} die"
     else:
         chord = g.die_profile_file is not None or g.second_angle is not None

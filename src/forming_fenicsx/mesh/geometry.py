@@ -129,7 +129,12 @@ def _extrusion(scene: Scene, structured: bool = True) -> None:
 
 def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
     """Gamma1 on the driven end face (entry for "push", exit for "pull"); the other end carries F_N
-    (Gamma5) when the scene gives one, else it is free (Gamma2 upstream, Gamma4 downstream)."""
+    (Gamma5) when the scene gives one, else it is free (Gamma2 upstream, Gamma4 downstream).
+    Rolling: Gamma1 is the entry face, whose speed the flow decides (fem/entry_speed.py) and which
+    carries the back tension; the exit face carries the front tension (Gamma5), or is free."""
+    if scene.process.kind == "rolling":
+        exit_role = "gamma5_force" if scene.process.front_tension else "gamma4_free"
+        return {"gamma1_velocity": list(entry), exit_role: list(exit)}
     driven, other, free = ((entry, exit, "gamma4_free") if scene.process.drive == "push"
                            else (exit, entry, "gamma2_free"))
     loaded = "gamma5_force" if scene.process.applied_force is not None else free
@@ -295,13 +300,17 @@ def build_mesh(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
     present = set(int(v) for v in facet_tags.values)
     present = set().union(*comm.allgather(present))
     roles = {name: tag for name, tag in ROLES.items() if tag in present}
-    return FormingMesh(mesh, facet_tags, roles, constraints(scene.process.velocity, roles))
+    driven = scene.process.kind != "rolling"
+    return FormingMesh(mesh, facet_tags, roles,
+                       constraints(scene.process.velocity, roles, driven))
 
 
-def constraints(velocity: float, roles: dict[str, int]) -> list[Constraint]:
-    """Gamma1, Gamma6 and Gamma7 are normal to x, y and z in every process: u_x = u_N^0 (2.5),
-    u_y = 0 and u_z = 0 (2.8)."""
-    found = [Constraint("gamma1_velocity", 0, velocity), Constraint("gamma6_symmetry", 1, 0.0)]
+def constraints(velocity: float, roles: dict[str, int], driven: bool = True) -> list[Constraint]:
+    """Gamma1, Gamma6 and Gamma7 are normal to x, y and z in every process: u_x = u_N^0 (2.5) on
+    a ``driven`` Gamma1 (not rolling's, whose speed is the flow's), u_y = 0 and u_z = 0 (2.8)."""
+    found = [Constraint("gamma6_symmetry", 1, 0.0)]
+    if driven:
+        found.insert(0, Constraint("gamma1_velocity", 0, velocity))
     if "gamma7_symmetry" in roles:
         found.append(Constraint("gamma7_symmetry", 2, 0.0))
     return found
@@ -351,6 +360,6 @@ def die_coordinate(scene: Scene, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.where(on_face, g.die_position + (h0 - y), x)
     profile = g.profile()
     along = profile.coordinate(x, y)
-    if scene.process.kind == "drawing":
+    if scene.process.kind != "extrusion":
         return along
     return np.where(x < profile.start[0], x, profile.start[0] + along)

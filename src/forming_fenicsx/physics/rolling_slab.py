@@ -128,3 +128,27 @@ def slab_rolling(radius: float, entry_thickness: float, exit_thickness: float, k
 
 def _trapezoid(values: np.ndarray, at: np.ndarray) -> float:
     return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(at)))
+
+
+def bite_limit(radius: float, entry_thickness: float, exit_thickness: float,
+               back_tension: float = 0.0, front_tension: float = 0.0, k: float = 1.0,
+               steps: int = 1000) -> float:
+    """The smallest Coulomb mu at which the slab solution has a neutral point (steady rolling),
+    to 1e-3 relative, by bisection; about tan(alpha/2) without tensions, alpha the bite angle."""
+    def rolls(mu: float) -> bool:
+        try:
+            slab_rolling(radius, entry_thickness, exit_thickness, k, mu,
+                         back_tension=back_tension, front_tension=front_tension, steps=steps)
+        except ValueError:
+            return False
+        return True
+
+    low, high = 0.0, 0.05
+    while not rolls(high):
+        low, high = high, 2 * high
+        if high > 10:
+            return math.inf
+    while high - low > 1e-3 * high:
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if rolls(middle) else (middle, high)
+    return high

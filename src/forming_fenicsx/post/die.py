@@ -16,6 +16,7 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.fem.projection import LumpedProjector
 from forming_fenicsx.mesh.geometry import die_coordinate
 from forming_fenicsx.physics import friction
+from forming_fenicsx.post import rolls
 from forming_fenicsx.post.contact_zone import facet_integrals, zone_scalars
 from forming_fenicsx.post.integrals import integrate
 
@@ -36,13 +37,17 @@ def die_pressure(problem: FlowProblem) -> Expr:
 
 def die_stresses(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
     """The stresses on Gamma3 at its nodes (P1, lumped projections over Gamma3): contact
-    pressure, averaged normal stress (when friction uses it) and friction stress |sigma_T|."""
+    pressure, averaged normal stress (when friction uses it) and friction stress |sigma_T|; on a
+    roll also the friction stress and the slip along the roll's motion (signed, rolls.py)."""
     sources = {"contact_pressure": die_pressure(problem)}
     if problem.normal_stress_average is not None:
         sources["averaged_normal_stress"] = problem.normal_stress_average.value
     if problem.has_friction:
-        slip = friction.tangential(problem.u, problem.n)
+        slip = friction.tangential(problem.slip(problem.u), problem.n)
         sources["friction_stress"] = problem.friction_coefficient() * ufl.sqrt(ufl.dot(slip, slip))
+    if problem.rolling:  # signed along the roll's motion: the friction hill and the neutral point
+        sources["shear_stress"] = rolls.shear_along(problem)
+        sources["slip"] = rolls.slip_along(problem)
     return {name: on_die_nodes(problem, expr, name) for name, expr in sources.items()}
 
 

@@ -6,16 +6,18 @@ from __future__ import annotations
 
 from typing import Any
 
+import ufl
+
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.physics import friction
 from forming_fenicsx.post.integrals import integrate
 
 
 def reaction(problem: FlowProblem, role: str = "gamma1_velocity") -> float:
-    """Force the constraint on ``role`` exerts on the workpiece along its component."""
-    component = next(c.component for c in problem.constraints if c.role == role)
-    return reaction_on(problem, role, component)
+    """Force the constraint on ``role`` exerts on the workpiece along its component (0 without
+    one: rolling's entry face, whose speed is free)."""
+    component = next((c.component for c in problem.constraints if c.role == role), None)
+    return 0.0 if component is None else reaction_on(problem, role, component)
 
 
 def reaction_on(problem: FlowProblem, role: str, component: int) -> float:
@@ -38,8 +40,7 @@ def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
     normal = integrate(problem, problem.contact_pressure(problem.u) * n[0] * ds)
     if not problem.has_friction:
         return normal, 0.0
-    traction = friction.friction_traction(problem.friction_coefficient(), problem.u, n)
-    return normal, integrate(problem, -traction[0] * ds)
+    return normal, integrate(problem, -problem.friction_traction()[0] * ds)
 
 
 def die_separation_force(problem: FlowProblem, component: int = 1) -> float:
@@ -53,16 +54,17 @@ def die_separation_force(problem: FlowProblem, component: int = 1) -> float:
     n, c = problem.n, problem.coordinates
     traction = problem.contact_pressure(problem.u) * n[component]
     if problem.has_friction:
-        traction -= friction.friction_traction(problem.friction_coefficient(), problem.u,
-                                               n)[component]
+        traction -= problem.friction_traction()[component]
     plain = problem.ds.measure(ROLES["gamma3_contact"])
     return integrate(problem, traction * c.separation_weight * plain)
 
 
 def applied_force_x(problem: FlowProblem) -> float:
-    """x-force of F_N on Gamma5 (2.7) acting on the workpiece."""
+    """x-force of F_N on Gamma5 (2.7) acting on the workpiece (rolling's tensions: f(e_x))."""
     if not problem.has_force:
         return 0.0
+    if problem.rolling:
+        return integrate(problem, problem.load(ufl.as_vector((1.0, 0.0))))
     return problem.scene.process.applied_force * integrate(
         problem, problem.n[0] * problem.ds(ROLES["gamma5_force"]))
 
@@ -70,18 +72,21 @@ def applied_force_x(problem: FlowProblem) -> float:
 def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, float]:
     """(relative residual, Gamma1 force, die normal x-force, die friction x-force, applied x-force)
     of the x force balance Gamma1 force + applied force = die force (verification.md), at the
-    current state."""
+    current state, relative to the largest of the forces (in rolling the rolls' normal and
+    friction x-forces nearly cancel)."""
     force = reaction(problem)
     die_normal, die_friction = die_forces_x(problem)
     external = applied_force_x(problem)
     die = die_normal + die_friction
-    return (abs(force + external - die) / max(abs(force), abs(die), 1e-300), force, die_normal,
-            die_friction, external)
+    scale = max(abs(force), abs(die), abs(die_normal), abs(die_friction), 1e-300)
+    return (abs(force + external - die) / scale, force, die_normal, die_friction, external)
 
 
 # forces on the whole product (the model's times CoordinateSystem.whole and the strip's width)
 PRODUCT_FORCES = ("ram_force", "drawing_force", "die_force_x", "die_normal_force_x",
-                  "die_friction_force_x", "applied_force_x")
+                  "die_friction_force_x", "applied_force_x", "roll_power")
+# forces and torques on each die half or roll, which the half model holds whole
+EACH_TOOL = ("die_separation_force", "die_side_force", "roll_force", "roll_torque")
 # the energy balance's ratios; its other terms are powers, scaled as the forces
 BALANCE_RATIOS = ("residual", "global_residual")
 
@@ -95,10 +100,11 @@ def whole_product(problem: FlowProblem, numbers: dict[str, Any]) -> dict[str, An
     factor = problem.coordinates.whole * width
     scaled = {key: value * factor if key in PRODUCT_FORCES else value
               for key, value in numbers.items()}
-    for key in ("die_separation_force", "die_side_force"):
+    for key in EACH_TOOL:
         if key in scaled:
             scaled[key] *= width
-    if "energy_balance" in scaled:
-        scaled["energy_balance"] = {key: value if key in BALANCE_RATIOS else value * factor
-                                    for key, value in scaled["energy_balance"].items()}
+    for balance in ("energy_balance", "power_balance"):
+        if balance in scaled:
+            scaled[balance] = {key: value if key in BALANCE_RATIOS else value * factor
+                               for key, value in scaled[balance].items()}
     return scaled

@@ -16,12 +16,15 @@ from forming_fenicsx.post.integrals import integrate
 
 def pass_shape(problem: FlowProblem) -> dict[str, float]:
     """The reduction r (of area for a round bar, of thickness for a strip) and the central-burst
-    indicator Delta of a profiled die at its semi_angle (closed_forms.central_burst_indicator);
-    none for a user's mesh."""
+    indicator Delta of a profiled die at its semi_angle (closed_forms.central_burst_indicator), or
+    a roll gap's h_m/L; none for a user's mesh."""
     g = problem.scene.geometry
     if g.mesh_file is not None:
         return {}
     reduction = 1 - area_ratio(g)
+    if problem.rolling:  # the roll gap's shape h_m/L (mean thickness over contact length)
+        return {"reduction": reduction, "gap_shape_factor":
+                0.5 * (g.entry_thickness + g.exit_thickness) / g.cone_length}
     if g.shape == "rectangle":  # the indicator is a 2D or round product's
         return {"reduction": reduction}
     symmetry = "axisymmetric" if g.round else g.symmetry

@@ -32,6 +32,7 @@ from typing import Any
 
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.config.sections import D_RELATIVE
+from forming_fenicsx.physics.rolling_slab import bite_limit
 from forming_fenicsx.solvers.secant import ILL_CONDITIONED
 
 PENETRATION = (0.01, 0.05)
@@ -72,6 +73,8 @@ def product_name(scene: Scene) -> str:
     axisymmetric or the 3D quarter of one), a bar (3D, rectangular section), or a strip (plane
     strain)."""
     g, drawing = scene.geometry, scene.process.kind == "drawing"
+    if scene.process.kind == "rolling":
+        return "rolled strip"
     shape = ("wire" if drawing else "rod") if g.round else "bar" if g.three_dimensional \
         else "strip"
     return f"{'drawn' if drawing else 'extruded'} {shape}"
@@ -153,7 +156,8 @@ def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> 
                         "about 35 %) or the friction", failure=True, cause=True)]
     if yields:
         load = "the drawing force" if drawing else "the back force on the product (Gamma5)" \
-            if scene.process.applied_force else "the flow"
+            if scene.process.applied_force else "the front tension" \
+            if scene.process.front_tension else "the flow"
         return [Finding("exit_zone", f"the {product} deforms after the die: {rigid}. It yields "
                         f"under {load}: not a steady process. Check process.applied_force and the "
                         "die (a product that leaves the land still converging), or refine the mesh "
@@ -298,10 +302,33 @@ def heat(summary: dict[str, Any], scene: Scene) -> list[Finding]:
     return found
 
 
+def bite(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """Rolling: the strip's slip on the rolls must change sign along the arc (the neutral point);
+    without one the rolls skid on the strip, and no steady rolling exists at this friction. The
+    message names the slab solution's limit (rolling_slab.bite_limit) for a Coulomb law."""
+    if scene.process.kind != "rolling" or math.isfinite(summary.get("neutral_x", math.nan)):
+        return None
+    g, process, law = scene.geometry, scene.process, scene.friction
+    speed = summary.get("entry_speed", math.nan) / process.velocity
+    limit = ""
+    if law.law == "coulomb":
+        k = scene.reference_flow_stress / math.sqrt(3.0)
+        mu = bite_limit(g.roll_radius, g.entry_thickness, g.exit_thickness,
+                        process.back_tension / k, process.front_tension / k)
+        limit = (f"; friction.mu = {law.mu:.3g}, and the slab solution needs mu above {mu:.3g} "
+                 f"here (about tan(alpha/2) = {math.tan(g.bite_angle / 2):.3g} without tensions)")
+    return Finding("bite", "the rolls do not draw the strip through the bite: its slip on the "
+                   "rolls does not change sign along the arc (no neutral point; the strip enters "
+                   f"at {speed:.3g} times the rolls' speed). The bite angle is "
+                   f"{g.die_angle:.3g} deg{limit}. Raise the friction, reduce the draft (a "
+                   "smaller bite angle) or lower the back tension", failure=True, cause=True)
+
+
 def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> list[Finding]:
     """Every check, a cause before its symptoms; ``converged``: whether the iteration converged
     (the advice differs)."""
-    found = rate_window(summary, scene)
+    found = [f for f in (bite(summary, scene),) if f is not None]
+    found += rate_window(summary, scene)
     found += [f for f in (die_penetration(summary, scene, converged), die_contact(summary, scene))
               if f is not None]
     found += [f for f in (compressibility(summary, scene, found),) if f is not None]

@@ -9,13 +9,15 @@ from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergen
                                               dissipation_outside_window, divergence_l2,
                                               exit_zone_rate_ratio, free_surface_crossing,
                                               relative_divergence)
-from forming_fenicsx.post.die import die_contact_fraction, die_scalars, die_scalars_3d
+from forming_fenicsx.post.die import (die_contact_fraction, die_profile, die_scalars,
+                                      die_scalars_3d)
 from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
 from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
                                           product_flow_stress, product_half_size, section_areas)
 from forming_fenicsx.post.ram_face import mean_hydrostatic_pressure
+from forming_fenicsx.post.rolls import roll_scalars
 
 
 def exit_section(problem: FlowProblem) -> float:
@@ -33,7 +35,9 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     balance, forces on the whole product (whole_product).
 
     Extrusion: ram force and pressure (force over the Gamma1 height), p_av. Drawing: drawing force
-    and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end.
+    and stress (Gamma1 force over the exit half-thickness), q_av, contact length and end. Rolling:
+    the roll force, torque and power, the strip's speeds, forward slip and neutral point
+    (rolls.py), q_av and the contact.
     """
     residual, force, die_normal, die_friction, external = force_balance(problem)
     divergence = divergence_l2(problem)
@@ -45,6 +49,10 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
         if problem.scene.geometry.die != "square":
             process.update({**die_numbers(problem), **pass_shape(problem)})
+    elif problem.rolling:
+        process = {"roll_force": die_separation_force(problem),
+                   **roll_scalars(problem, die_profile(problem)), **die_numbers(problem),
+                   **pass_shape(problem)}
     else:
         stress = force / exit_section(problem)
         strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)

@@ -1,0 +1,62 @@
+"""Rolling's entry speed, which the flow decides: the entry face Gamma1 is free along x (it carries
+the back tension), and the strip is held along x only by the friction with the rolls.
+
+Friction's bound tau_f is frozen from an earlier iterate (forms.FlowProblem.friction_bound), so the
+first solve, from a uniform modulus, would have no friction and a free x-translation. That solve
+holds Gamma1's x-velocity at a guess v_0 by the penalty traction -k (u_x - v_0) with k = 1/d_N,
+the contact's stiffness, without the tensions (``released`` 0 scales them: a front tension could
+pull the strip off the rolls in that viscous first solve, and leave no friction to hold it); the
+first freeze of the frozen coefficients, which takes the friction bound from that solve's contact
+pressure, releases it (k = 0, the tensions on), and every later iterate solves the problem with the
+entry speed free. The held iterate never counts as converged (``change`` is 1).
+"""
+from __future__ import annotations
+
+import dolfinx.fem
+from petsc4py import PETSc
+
+
+class EntrySpeed:
+    """The hold of Gamma1's x-velocity at ``guess`` with the stiffness ``stiffness`` until the
+    first freeze (a frozen coefficient of the flow problem, frozen.py)."""
+
+    name = "entry speed hold"
+    coupled = False
+    tangent = False
+
+    def __init__(self, mesh, guess: float, stiffness: float, ds_entry):
+        self.stiffness = dolfinx.fem.Constant(mesh, PETSc.ScalarType(stiffness))
+        self.released = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
+        self.guess = dolfinx.fem.Constant(mesh, PETSc.ScalarType(guess))
+        self.ds = ds_entry
+
+    @property
+    def held(self) -> bool:
+        return float(self.stiffness.value) > 0
+
+    def form(self, u, v):
+        """int_G1 k u_x v_x: the hold's part of the bilinear form."""
+        return self.stiffness * u[0] * v[0] * self.ds
+
+    def load(self, v):
+        """int_G1 k v_0 v_x: the hold's part of the right-hand side."""
+        return self.stiffness * self.guess * v[0] * self.ds
+
+    def energy(self, u):
+        """int_G1 k/2 (u_x - v_0)^2: the hold's part of Newton's energy."""
+        return 0.5 * self.stiffness * (u[0] - self.guess) ** 2 * self.ds
+
+    def freeze(self, u: dolfinx.fem.Function) -> None:
+        self.stiffness.value, self.released.value = 0.0, 1.0
+
+    def settle(self, u: dolfinx.fem.Function) -> None:
+        self.freeze(u)
+
+    def change(self, u: dolfinx.fem.Function) -> float:
+        return 1.0 if self.held else 0.0
+
+    def snapshot(self) -> object:
+        return float(self.stiffness.value), float(self.released.value)
+
+    def restore(self, saved: object) -> None:
+        self.stiffness.value, self.released.value = saved
