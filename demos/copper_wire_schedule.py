@@ -16,9 +16,9 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from forming_fenicsx.core.report import markdown_table
-from forming_fenicsx.app.run import run_scene
+from forming_fenicsx.app.schedule import run_passes
 from forming_fenicsx.config.loader import load_scene
+from forming_fenicsx.core.report import markdown_table
 
 SCENE = Path(__file__).with_name("copper_wire_pass.toml")
 DIAMETERS = (2.0, 1.8, 1.62, 1.46)
@@ -29,16 +29,7 @@ COLUMNS = ("drawing_stress", "mean_entry_strain", "mean_exit_strain", "redundant
 def run_schedule(out: Path, overrides: list[str] | None = None, scene: Path = SCENE) -> list[dict]:
     """Run the passes of ``scene`` in order into out/pass1, out/pass2, ...; returns their
     summaries."""
-    summaries, out = [], Path(out).resolve()  # the next pass reads the CSV from its scene's folder
-    for number, (entry, exit_) in enumerate(zip(DIAMETERS, DIAMETERS[1:]), start=1):
-        settings = [f"geometry.entry_diameter={entry}", f"geometry.exit_diameter={exit_}",
-                    *(overrides or [])]
-        if summaries:
-            previous = out / f"pass{number - 1}" / "exit_strain.csv"
-            settings.append(f"material.initial_strain_file=\"{previous}\"")
-        summaries.append(run_scene(load_scene(scene, settings), out / f"pass{number}",
-                                   title=f"pass {number}", overwrite=True))
-    return summaries
+    return run_passes(scene, DIAMETERS, "diameter", out, overrides, load=load_scene)
 
 
 def main() -> None:

@@ -251,7 +251,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         write_summary(out / "summary.json", summary)
         key = {"extrusion": "ram_pressure", "drawing": "drawing_stress",
                "rolling": "roll_force"}[scene.process.kind]
-        unit = scene.units.summary([key], scene.geometry.whole_forces).get(key, "")
+        unit = scene.units.label(scene.units.dimension(key, scene.geometry.whole_forces))
         log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s",
                  key.replace("_", " "), summary[key], f" {unit}" if unit else "",
                  summary["force_balance_residual"], summary["linear_solves"],

@@ -19,14 +19,18 @@ def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str
     (flux-weighted), lowest and highest exit temperature (across the exit section), the
     workpiece's lowest and highest (nodal values), and the energy balance
     (TemperatureField.energy_balance) against the work of the driving force, the ram or drawing
-    force (``numbers``) times the process velocity (plus the applied force's on Gamma5)."""
+    force (``numbers``) times the process velocity (plus the applied force's on Gamma5), or the
+    rolls' and the tensions' power."""
     field = problem.field("temperature")
     if field is None:
         return {}
     field.settle(problem.u)
-    force = numbers["ram_force"] if "ram_force" in numbers else numbers["drawing_force"]
-    power = force * problem.scene.process.velocity
-    if problem.has_force:
+    if problem.rolling:  # the rolls' power and the tensions' (rolls.power_balance)
+        power = numbers["roll_power"] + numbers["power_balance"]["tension_power"]
+    else:
+        force = numbers["ram_force"] if "ram_force" in numbers else numbers["drawing_force"]
+        power = force * problem.scene.process.velocity
+    if problem.has_force and not problem.rolling:
         power += integrate(problem, problem.scene.process.applied_force
                            * ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma5_force"]))
     balance = field.energy_balance(power)

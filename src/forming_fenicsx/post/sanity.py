@@ -304,8 +304,9 @@ def heat(summary: dict[str, Any], scene: Scene) -> list[Finding]:
 
 def bite(summary: dict[str, Any], scene: Scene) -> Finding | None:
     """Rolling: the strip's slip on the rolls must change sign along the arc (the neutral point);
-    without one the rolls skid on the strip, and no steady rolling exists at this friction. The
-    message names the slab solution's limit (rolling_slab.bite_limit) for a Coulomb law."""
+    without one the rolls skid on the strip (too little friction for the bite, or a tension that
+    pulls the strip through or holds it back), and no steady rolling exists. The message names the
+    slab solution's limit (rolling_slab.bite_limit) for a Coulomb law."""
     if scene.process.kind != "rolling" or math.isfinite(summary.get("neutral_x", math.nan)):
         return None
     g, process, law = scene.geometry, scene.process, scene.friction
@@ -321,7 +322,7 @@ def bite(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "rolls does not change sign along the arc (no neutral point; the strip enters "
                    f"at {speed:.3g} times the rolls' speed). The bite angle is "
                    f"{g.die_angle:.3g} deg{limit}. Raise the friction, reduce the draft (a "
-                   "smaller bite angle) or lower the back tension", failure=True, cause=True)
+                   "smaller bite angle) or lower the tensions", failure=True, cause=True)
 
 
 def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> list[Finding]:

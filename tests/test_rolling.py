@@ -1,0 +1,173 @@
+"""Flat rolling (process.kind = "rolling", docs/rolling.md): the power balance of the rolls, the
+tensions and the dissipation; the FE model against the slab solution where slab theory holds (a
+thin strip, R/h1 = 50); what the tensions do to the neutral point, the roll force and the torque;
+a bite that friction cannot draw in; the files of a run and the scene keys. The demo strip on a
+0.2 mm mesh (4 elements across the exit half-thickness)."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import runpy
+import sys
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+from forming_fenicsx.app.run import run_scene, solve_scene
+from forming_fenicsx.config.loader import load_scene, scene_from_dict
+from forming_fenicsx.core.errors import SceneError
+from forming_fenicsx.physics.rolling_slab import bite_limit, slab_rolling
+from forming_fenicsx.post.rolls import neutral_point
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+STRIP = DEMOS / "strip_rolling.toml"
+COARSE = ["discretisation.mesh_size=0.2", "output.fields=false", "output.figures=false"]
+
+
+def _strip(*overrides: str):
+    return load_scene(STRIP, [*COARSE, *overrides])
+
+
+@pytest.fixture(scope="module")
+def plain():
+    """The demo strip without tensions: its summary."""
+    return solve_scene(_strip())[2]
+
+
+def test_roll_power_equals_dissipation_plus_tension_work():
+    """Roll torque x angular speed (both rolls) + the tensions' power = plastic + friction (+ the
+    penalties' volumetric and contact powers, 0.02 % and 0.2 %) to 1e-4 measured (the iteration
+    balances the x forces to solver.force_tolerance 1e-4); asserted to 1e-3 of the roll power.
+    With back tension 20 and front tension 40 MPa."""
+    scene = _strip("process.back_tension=20", "process.front_tension=40")
+    summary = solve_scene(scene)[2]
+    powers = summary["power_balance"]
+    omega = scene.process.velocity / scene.geometry.roll_radius
+    assert summary["roll_power"] == pytest.approx(2 * summary["roll_torque"] * omega, rel=1e-12)
+    assert powers["roll_power"] == pytest.approx(summary["roll_power"], rel=1e-12)
+    spent = sum(powers[key] for key in ("plastic_power", "volumetric_power", "friction_power",
+                                        "contact_power"))
+    assert abs(powers["roll_power"] + powers["tension_power"] - spent) < 1e-3 * powers["roll_power"]
+    assert abs(powers["residual"]) < 1e-3
+    # the tensions' power, from the strip's own speeds: t_f v1 h1 - t_b v0 h0 (both halves)
+    g = scene.geometry
+    tensions = 40 * summary["exit_speed"] * g.exit_thickness \
+        - 20 * summary["entry_speed"] * g.entry_thickness
+    assert powers["tension_power"] == pytest.approx(tensions, rel=1e-6)
+    assert powers["plastic_power"] > 10 * powers["friction_power"] > 0
+    assert summary["linear_solves"] <= 20 and summary["converged"]
+
+
+def test_a_thin_strip_rolls_as_slab_theory_says(plain):
+    """R/h1 = 50 (R = 80 mm, 2 -> 1.6 mm, mu = 0.1, h_m/L = 0.32), where the deformation is nearly
+    homogeneous: roll force -0.66 %, torque +0.60 %, neutral angle -3.5 % and forward slip +2.0 %
+    from the slab solution at the law's k (measured on the 0.2 mm mesh)."""
+    scene = _strip("geometry.roll_radius=80", "friction.mu=0.1")
+    summary = solve_scene(scene)[2]
+    k = scene.reference_flow_stress / math.sqrt(3.0)
+    slab = slab_rolling(80.0, 2.0, 1.6, k, 0.1)
+    assert summary["roll_force"] == pytest.approx(slab.roll_force, rel=0.02)
+    assert summary["roll_torque"] == pytest.approx(slab.torque, rel=0.02)
+    assert summary["neutral_angle"] == pytest.approx(math.degrees(slab.neutral_angle), rel=0.06)
+    assert summary["forward_slip"] == pytest.approx(slab.forward_slip, rel=0.05)
+    assert summary["bite_angle"] == pytest.approx(math.degrees(slab.bite_angle), rel=1e-12)
+    # continuity: the strip's speeds through the two end faces
+    assert summary["exit_speed"] * 1.6 == pytest.approx(summary["entry_speed"] * 2.0, rel=1e-3)
+    assert summary["linear_solves"] <= 20
+
+
+def test_tensions_move_the_neutral_point_and_lower_the_roll_force(plain):
+    """Back tension (50 MPa) moves the neutral point toward the roll gap (2.46 -> 1.44 deg), raises
+    the torque (1543 -> 2351 N mm/mm) and lowers the forward slip; front tension (50 MPa) moves
+    it toward the bite (3.78 deg) and lowers the torque (682); both lower the roll force (1059 ->
+    939, 996 N/mm)."""
+    back = solve_scene(_strip("process.back_tension=50"))[2]
+    front = solve_scene(_strip("process.front_tension=50"))[2]
+    assert back["neutral_angle"] < plain["neutral_angle"] - 0.5 < front["neutral_angle"] - 1.5
+    assert back["roll_torque"] > 1.3 * plain["roll_torque"] > 2.6 * front["roll_torque"]
+    assert back["roll_force"] < front["roll_force"] < plain["roll_force"]
+    assert back["forward_slip"] < plain["forward_slip"] < front["forward_slip"]
+    assert 0 < plain["neutral_angle"] < plain["bite_angle"]
+    assert plain["roll_force"] == pytest.approx(1059.2, rel=2e-3)
+
+
+def test_a_bite_that_friction_cannot_draw_in_fails_with_its_reason():
+    """mu = 0.06 below the slab solution's limit 0.071 for a bite angle of 8.11 deg: the strip
+    stops, no neutral point, and the run fails naming the bite, the limit and what to change."""
+    summary = solve_scene(_strip("friction.mu=0.06"))[2]
+    assert not summary["converged"]
+    assert summary["reason"].startswith("the rolls do not draw the strip through the bite")
+    assert "0.071" in summary["reason"] and "Raise the friction" in summary["reason"]
+    assert bite_limit(20.0, 2.0, 1.6) == pytest.approx(math.tan(math.radians(8.1096) / 2),
+                                                       rel=0.01)
+
+
+def test_neutral_point_is_where_the_slip_changes_sign():
+    import numpy as np
+
+    x = np.array([0.0, 1.0, 2.0, 3.0])
+    assert neutral_point(x, np.array([-2.0, -1.0, 1.0, 3.0])) == pytest.approx(1.5)
+    assert math.isnan(neutral_point(x, np.array([1.0, 2.0, 3.0, 4.0])))
+
+
+def test_run_writes_the_rolls(shared_tmp):
+    """A strip 100 mm wide: forces in N and torques in N mm (summary's units), die.csv with the
+    signed friction stress and slip along the arc, and rolls.png."""
+    scene = load_scene(STRIP, ["discretisation.mesh_size=0.2", "output.fields=false",
+                               "geometry.width=100"])
+    out = shared_tmp / "rolls"
+    summary = run_scene(scene, out)
+    units = summary["units"]["quantities"]
+    assert units["roll_force"] == "N" and units["roll_torque"] == "N*mm"
+    assert units["roll_power"] == "N*mm/s" and units["neutral_x"] == "mm"
+    assert summary["roll_force"] == pytest.approx(100 * 1059.2, rel=2e-3)
+    written = json.loads((out / "summary.json").read_text())
+    assert written["neutral_angle"] == pytest.approx(summary["neutral_angle"])
+    if MPI.COMM_WORLD.rank == 0:
+        with (out / "die.csv").open() as stream:
+            rows = list(csv.reader(stream))
+        assert rows[0][-2:] == ["shear_stress [MPa]", "slip [mm/s]"]
+        shear = [float(row[-2]) for row in rows[1:]]
+        assert shear[0] > 0 > shear[-1]  # forward at the bite, backward at the gap
+        assert (out / "rolls.png").stat().st_size > 0 and not (out / "die.png").exists()
+
+
+@pytest.mark.parametrize("overrides, key", [
+    (["friction.mu=0"], "friction.mu"),
+    (["geometry.symmetry=\"axisymmetric\""], "geometry.symmetry"),
+    (["process.applied_force=10"], "process.applied_force"),
+    (["process.drive=\"pull\""], "process.drive"),
+    (["process.back_tension=-1"], "process.back_tension"),
+    (["geometry.roll_radius=0.1"], "geometry.roll_radius"),
+    (["free_surface.update=true"], "free_surface.update"),
+    (["accuracy.target=0.01"], "accuracy.target"),
+    (["geometry.length=10"], "geometry.length"),
+])
+def test_rolling_keys_are_checked(overrides, key):
+    with pytest.raises(SceneError) as error:
+        load_scene(STRIP, overrides)
+    assert error.value.key == key
+
+
+def test_tensions_belong_to_rolling():
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "drawing", "front_tension": 10.0}})
+    assert error.value.key == "process.front_tension"
+    with pytest.raises(SceneError) as error:
+        scene_from_dict({"process": {"kind": "rolling"}, "geometry": {"entry_thickness": 2.0}})
+    assert error.value.key == "geometry.exit_thickness"
+
+
+def test_the_fe_against_slab_demo_runs(shared_tmp, monkeypatch):
+    """demos/rolling_fe_vs_slab.py --quick: its table, JSON and figure (two grid points)."""
+    out = shared_tmp / "grid"
+    monkeypatch.setattr(sys, "argv", ["rolling_fe_vs_slab.py", "--quick", "--out", str(out)])
+    runpy.run_path(str(DEMOS / "rolling_fe_vs_slab.py"), run_name="__main__")
+    if MPI.COMM_WORLD.rank == 0:
+        rows = json.loads((out / "fe_vs_slab.json").read_text())
+        assert len(rows) == 2 and all(row["fe_converged"] for row in rows)
+        thin = next(row for row in rows if row["R/h1"] == 50.0)
+        assert thin["fe_torque"] == pytest.approx(thin["slab_torque"], rel=0.03)
+        assert (out / "fe_vs_slab.png").stat().st_size > 0
