@@ -9,8 +9,10 @@
 # (forming_fenicsx.physics.rolling_slab), both dimensionless: exit thickness h1 = 1, the shear flow
 # stress k of the FE law at its reference strain rate (law (4.5) with alpha = 1e-3: nearly rate
 # independent), no tensions. Mean roll pressure P/(2k L), torque G/(2k L^2), L the projected
-# contact length. Writes fe_vs_slab.json, fe_vs_slab.md and fe_vs_slab.png into --out;
-# docs/rolling.md shows a run. --quick: two points (tests/test_rolling.py runs it).
+# contact length. Writes fe_vs_slab.json, fe_vs_slab.md and fe_vs_slab.png into --out, and
+# friction_hills.png: the FE's and the slab's roll pressure and friction stress along the arc at
+# R/h1 = 200, 20 %, mu = 0.1 and 0.3. docs/rolling.md shows a run. --quick: two points, no hills
+# (tests/test_rolling.py runs it).
 
 import argparse
 import json
@@ -25,6 +27,7 @@ from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.io.figure import pyplot, save
 from forming_fenicsx.physics.rolling_slab import slab_rolling
+from forming_fenicsx.post.die import die_profile
 
 RATIOS = (10.0, 25.0, 50.0, 100.0, 200.0)
 REDUCTIONS = (0.1, 0.2, 0.3, 0.4)
@@ -119,26 +122,67 @@ def table(rows: list[dict]) -> str:
 
 
 def plot(rows: list[dict], path: Path) -> Path:
-    """fe_vs_slab.png: FE over slab minus 1 of the roll force, torque and forward slip against
-    h_m/L, the roll gap's shape, one marker per friction."""
+    """fe_vs_slab.png against h_m/L, the roll gap's shape, one marker per friction: FE over slab
+    minus 1 of the roll force and the torque, FE minus slab of phi_n/alpha and of the forward slip
+    (points: S is small near the bite limit)."""
     plt = pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharex=True)
+    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2), sharex=True)
     markers = dict(zip(FRICTIONS, "os^Dv", strict=True))
-    for ax, key, title in zip(axes, ("pressure", "torque", "forward_slip"),
-                              ("roll force", "torque", "forward slip"), strict=True):
+    panels = (("pressure", "roll force: FE / slab - 1 [%]", True),
+              ("torque", "torque: FE / slab - 1 [%]", True),
+              ("neutral_over_bite", "phi_n/alpha: FE - slab", False),
+              ("forward_slip", "forward slip: FE - slab [% points]", False))
+    for ax, (key, label, relative) in zip(axes, panels, strict=True):
         for friction in FRICTIONS:
             chosen = [r for r in rows if r["friction"] == friction]
-            ax.plot([r["h_mean/L"] for r in chosen], [100 * difference(r, key) for r in chosen],
-                    markers[friction], label=f"mu = {friction}" if friction != "sticking"
-                    else "sticking (FE m = 1)", alpha=0.8)
+            values = [100 * difference(r, key) if relative else
+                      (r[f"fe_{key}"] - r.get(f"slab_{key}", math.nan))
+                      * (100 if key == "forward_slip" else 1) for r in chosen]
+            ax.plot([r["h_mean/L"] for r in chosen], values, markers[friction],
+                    label=f"mu = {friction}" if friction != "sticking" else "sticking (FE m = 1)",
+                    alpha=0.8)
         ax.axhline(0.0, color="k", linewidth=0.6)
         ax.set_xscale("log")
         ax.set_xlabel("h_m/L (mean thickness over contact length)")
-        ax.set_ylabel(f"FE / slab - 1 of the {title} [%]")
+        ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle("Flat rolling: the FE model against slab theory (rigid rolls, no tensions)",
                  fontsize=10)
+    fig.tight_layout()
+    return save(fig, path)
+
+
+HILLS = ((200.0, 0.2, 0.1), (200.0, 0.2, 0.3))
+
+
+def hills(path: Path) -> Path:
+    """friction_hills.png: p/2k and tau/k against the distance from the roll gap over L, FE (the
+    nodes of the arc) and slab, for the HILLS points."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(HILLS), figsize=(12, 4.2))
+    for ax, (ratio, reduction, mu) in zip(axes, HILLS, strict=True):
+        scene = scene_of(ratio, reduction, mu)
+        problem, _, summary = solve_scene(scene)
+        profile = die_profile(problem)
+        g, k = scene.geometry, scene.reference_flow_stress / math.sqrt(3.0)
+        slab = slab_rolling(g.roll_radius, g.entry_thickness, g.exit_thickness, k, mu)
+        if profile is None:
+            continue
+        x = (g.die_exit - profile["x"]) / g.cone_length
+        ax.plot(x, profile["contact_pressure"] / (2 * k), "-", color="tab:blue", label="FE p/2k")
+        ax.plot(x, profile["shear_stress"] / k, "-", color="tab:green", label="FE tau/k")
+        ax.plot(slab.x / g.cone_length, slab.pressure / (2 * k), "--", color="tab:blue",
+                label="slab p/2k")
+        ax.plot(slab.x / g.cone_length, slab.friction / k, "--", color="tab:green",
+                label="slab |tau|/k")
+        ax.axhline(1.0, color="0.6", linewidth=0.6)
+        ax.set_title(f"R/h1 = {ratio:g}, r = {reduction:g}, mu = {mu:g}: P/(2kL) FE "
+                     f"{summary['roll_force'] / (2 * k * g.cone_length):.3f}, slab "
+                     f"{slab.roll_force / (2 * k * g.cone_length):.3f}", fontsize=9)
+        ax.set_xlabel("distance from the roll gap / L (bite at 1)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
     fig.tight_layout()
     return save(fig, path)
 
@@ -161,6 +205,8 @@ def main() -> None:
         (args.out / "fe_vs_slab.md").write_text(table(rows) + "\n")
         plot(rows, args.out / "fe_vs_slab.png")
         print(table(rows))
+    if not args.quick:
+        hills(args.out / "friction_hills.png")
 
 
 if __name__ == "__main__":
