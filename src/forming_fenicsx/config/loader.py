@@ -70,6 +70,9 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
     if not isinstance(kind, str) or kind not in PROCESSES:
         raise SceneError("process.kind", f"must be one of {', '.join(PROCESSES)}; got {kind!r}")
     defaults = PROCESS_DEFAULTS[kind]
+    if "roll_rpm" in tables["process"] and "velocity" in tables["process"]:
+        raise SceneError("process.roll_rpm", "give the rolls' surface speed (process.velocity) or "
+                         "their revolutions per minute (process.roll_rpm), not both")
     if kind == "rolling" and "drive" in tables["process"]:
         raise SceneError("process.drive", "does not apply to rolling: the rolls drive the strip "
                          "(process.velocity is their surface speed)")

@@ -30,7 +30,7 @@ from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, ROLLING_D_N_RE
                                              Scales, Solver, Thermal)
 from forming_fenicsx.config.strain_profile import check_section, read_strain_profile
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.core.units import Units
+from forming_fenicsx.core.units import TIMES, Units
 from forming_fenicsx.physics.flow_laws import FlowLaw
 
 
@@ -66,6 +66,8 @@ class Scene:
         mollification length."""
         self.geometry.resolve()
         self.geometry.check()
+        if self.process.roll_rpm is not None:
+            self._surface_speed()
         if self.material.law == "sellars_tegart":  # T: the [thermal] field, or the law's own
             if self.thermal is not None:
                 if self.material.temperature is not None:
@@ -101,6 +103,17 @@ class Scene:
             if self.thermal.solidus is None:
                 self.thermal.solidus = SOLIDUS.get(getattr(self.material, "name", None))
         self._not_molten()
+
+    def _surface_speed(self) -> None:
+        """process.velocity from process.roll_rpm: v_R = 2 pi R n / 60 in the scene's length over
+        its time unit (units.time, required)."""
+        time = self.units.time
+        if time not in TIMES:
+            raise SceneError("process.roll_rpm", "needs units.time (one of "
+                             f"{', '.join(TIMES)}) to make a surface speed of revolutions per "
+                             f"minute; got {time!r}")
+        self.process.velocity = (2 * math.pi * self.geometry.roll_radius * self.process.roll_rpm
+                                 / 60.0 * TIMES[time])
 
     def _not_molten(self) -> None:
         """An isothermal law's temperature must lie below the named material's solidus."""

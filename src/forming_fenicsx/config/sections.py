@@ -24,8 +24,9 @@ class Process:
     ``drive`` says where the velocity is prescribed: "pull" at the exit face (drawing), "push" at
     the entry face (extrusion's ram). F_N acts on the other end face, which is free without it.
 
-    Rolling: ``velocity`` is the rolls' surface speed and the strip's speed is the problem's; the
-    end faces carry the ``back_tension`` (entry) and ``front_tension`` (exit), stresses >= 0.
+    Rolling: ``velocity`` is the rolls' surface speed (or ``roll_rpm`` their revolutions per
+    minute) and the strip's speed is the problem's; the end faces carry the ``back_tension``
+    (entry) and ``front_tension`` (exit), stresses >= 0.
     """
 
     kind: str = "extrusion"
@@ -34,6 +35,7 @@ class Process:
     drive: str = "push"
     back_tension: float = 0.0
     front_tension: float = 0.0
+    roll_rpm: float | None = None
 
     def check(self) -> None:
         if self.kind not in PROCESSES:
@@ -54,6 +56,12 @@ class Process:
                                  "product's end load is process.applied_force")
             if not (math.isfinite(value) and value >= 0):
                 raise SceneError(f"process.{key}", f"must be a finite stress >= 0; got {value}")
+        if self.roll_rpm is not None:
+            if self.kind != "rolling":
+                raise SceneError("process.roll_rpm", "applies to rolling only")
+            if not (math.isfinite(self.roll_rpm) and self.roll_rpm > 0):
+                raise SceneError("process.roll_rpm",
+                                 f"must be a finite number > 0; got {self.roll_rpm}")
         if self.kind == "rolling" and self.applied_force is not None:
             raise SceneError("process.applied_force", "does not apply to rolling: its end faces "
                              "carry process.back_tension and process.front_tension")

@@ -9,7 +9,7 @@ from forming_fenicsx.core.numbers import is_number
 from forming_fenicsx.core.richardson import MIN_ORDER, richardson
 
 
-QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure"}
+QUANTITIES = {"extrusion": "ram_pressure", "drawing": "mean_die_pressure", "rolling": "roll_force"}
 
 
 NUMERICAL_SECTIONS = ("discretisation", "solver", "penalty", "output")
