@@ -8,10 +8,11 @@
 # setting its default) beside the von Karman slab solution for rigid rolls
 # (forming_fenicsx.physics.rolling_slab), both dimensionless: exit thickness h1 = 1, the shear flow
 # stress k of the FE law at its reference strain rate (law (4.5) with alpha = 1e-3: nearly rate
-# independent), no tensions. Mean roll pressure P/(2k L), torque G/(2k L^2), L the projected
-# contact length. Writes fe_vs_slab.json, fe_vs_slab.md and fe_vs_slab.png into --out, and
-# friction_hills.png: the FE's and the slab's roll pressure and friction stress along the arc at
-# R/h1 = 200, 20 %, mu = 0.1 and 0.3. docs/rolling.md shows a run. --quick: two points, no hills
+# independent), no tensions; the sticking rows also beside Sims' published theory (1954). Mean roll
+# pressure P/(2k L), torque G/(2k L^2), L the projected contact length. Writes fe_vs_slab.json,
+# fe_vs_slab.md and fe_vs_slab.png into --out, and friction_hills.png: the FE's and the slab's
+# roll pressure and friction stress along the arc at R/h1 = 200, 20 %, mu = 0.1 and 0.3.
+# docs/rolling.md shows a run. --quick: two points, no hills
 # (tests/test_rolling.py runs it).
 
 import argparse
@@ -26,7 +27,7 @@ from forming_fenicsx.app.run import solve_scene
 from forming_fenicsx.config.loader import scene_from_dict
 from forming_fenicsx.core.report import markdown_table
 from forming_fenicsx.io.figure import pyplot, save
-from forming_fenicsx.physics.rolling_slab import slab_rolling
+from forming_fenicsx.physics.rolling_slab import sims_sticking, slab_rolling
 from forming_fenicsx.post.die import die_profile
 
 RATIOS = (10.0, 25.0, 50.0, 100.0, 200.0)
@@ -59,10 +60,16 @@ def slab_numbers(scene, friction) -> dict:
     except ValueError:
         return {"slab_slips": True}
     L = r.contact_length
-    return {"slab_slips": False, "slab_pressure": r.roll_force / (2 * k * L),
-            "slab_torque": r.torque / (2 * k * L**2),
-            "slab_neutral_over_bite": r.neutral_angle / r.bite_angle,
-            "slab_forward_slip": r.forward_slip}
+    found = {"slab_slips": False, "slab_pressure": r.roll_force / (2 * k * L),
+             "slab_torque": r.torque / (2 * k * L**2),
+             "slab_neutral_over_bite": r.neutral_angle / r.bite_angle,
+             "slab_forward_slip": r.forward_slip}
+    if friction == "sticking":  # Sims' published theory, with its L = sqrt(R dh)
+        sims = sims_sticking(g.roll_radius, g.entry_thickness, g.exit_thickness)
+        draft = g.entry_thickness - g.exit_thickness
+        found.update({"sims_pressure": sims.force_factor * math.sqrt(g.roll_radius * draft) / L,
+                      "sims_neutral_over_bite": sims.neutral_angle / r.bite_angle})
+    return found
 
 
 def fe_numbers(scene) -> dict:

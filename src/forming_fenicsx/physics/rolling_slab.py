@@ -152,3 +152,32 @@ def bite_limit(radius: float, entry_thickness: float, exit_thickness: float,
         middle = 0.5 * (low + high)
         low, high = (low, middle) if rolls(middle) else (middle, high)
     return high
+
+
+@dataclass(frozen=True)
+class SimsRolling:
+    """Sims' roll force for sticking friction (hot rolling): ``force_factor`` Q_p = P/(2k L) with
+    L = sqrt(R dh), and the ``neutral_angle`` phi_n (radians)."""
+
+    force_factor: float
+    neutral_angle: float
+
+
+def sims_sticking(radius: float, entry_thickness: float, exit_thickness: float) -> SimsRolling:
+    """R. B. Sims, The calculation of roll force and torque in hot rolling mills, Proc. Inst. Mech.
+    Eng. 168 (1954) 191: Orowan's inhomogeneous theory with sticking friction (p/2k = pi/4 (1 +
+    ln(h/h_1)) + sqrt(R/h_1) arctan(sqrt(R/h_1) phi) on the exit side, its mirror from the entry),
+    small angles, in closed form. With r the reduction and a = sqrt((1 - r)/r):
+        Q_p = pi/2 a arctan(1/a) - pi/4 - a sqrt(R/h_1) ln(h_n/h_1) + a/2 sqrt(R/h_1) ln(1/(1-r)),
+        phi_n = sqrt(h_1/R) tan(pi/8 sqrt(h_1/R) ln(1 - r) + arctan(1/a)/2),
+    h_n = h_1 + R phi_n^2. The shear stress's share of the yield condition (the pi/4) is what sets
+    it below the homogeneous slab solution with sticking."""
+    r = 1.0 - exit_thickness / entry_thickness
+    if not 0 < r < 1 or radius <= 0:
+        raise ValueError("need 0 < exit thickness < entry thickness and a radius > 0")
+    a, ratio = math.sqrt((1 - r) / r), math.sqrt(radius / exit_thickness)
+    phi_n = math.tan(math.pi / 8 / ratio * math.log(1 - r) + 0.5 * math.atan(1 / a)) / ratio
+    h_n = exit_thickness + radius * phi_n**2
+    force = (math.pi / 2 * a * math.atan(1 / a) - math.pi / 4
+             - a * ratio * math.log(h_n / exit_thickness) + 0.5 * a * ratio * math.log(1 / (1 - r)))
+    return SimsRolling(force, phi_n)
