@@ -249,17 +249,22 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
             write_die_plot(profile, out / "die.png", heading, scene)
         write_history(out / "history.csv", result.history)
         write_summary(out / "summary.json", summary)
+
+        def labelled(key: str) -> str:
+            """A summary number with its unit, as the log shows it."""
+            unit = scene.units.label(scene.units.dimension(key, scene.geometry.whole_forces))
+            return f"{summary[key]:.5g}" + (f" {unit}" if unit else "")
+
         key = {"extrusion": "ram_pressure", "drawing": "drawing_stress",
                "rolling": "roll_force"}[scene.process.kind]
-        unit = scene.units.label(scene.units.dimension(key, scene.geometry.whole_forces))
-        log.info("%s %.5g%s, force balance residual %.2e, %d linear solves, %.1f s",
-                 key.replace("_", " "), summary[key], f" {unit}" if unit else "",
-                 summary["force_balance_residual"], summary["linear_solves"],
-                 summary["wall_time_s"])
+        log.info("%s %s, force balance residual %.2e, %d linear solves, %.1f s",
+                 key.replace("_", " "), labelled(key), summary["force_balance_residual"],
+                 summary["linear_solves"], summary["wall_time_s"])
         if scene.process.kind == "rolling":
-            log.info("rolls: torque %.5g, neutral point %.3g deg (x = %.5g), forward slip %.3g %%, "
-                     "entry speed %.5g", summary["roll_torque"], summary["neutral_angle"],
-                     summary["neutral_x"], 100 * summary["forward_slip"], summary["entry_speed"])
+            log.info("rolls: torque %s, neutral point %.3g deg (x = %s), forward slip %.3g %%, "
+                     "entry speed %s", labelled("roll_torque"), summary["neutral_angle"],
+                     labelled("neutral_x"), 100 * summary["forward_slip"],
+                     labelled("entry_speed"))
         if "free_surface" in summary:
             surface = summary["free_surface"]
             size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key
