@@ -24,10 +24,10 @@ from forming_fenicsx.config.geometry import (ConicalExtrusionGeometry, DrawingGe
                                              ExtrusionGeometry)
 from forming_fenicsx.config.roll_gap import RollingGeometry
 from forming_fenicsx.config.materials import SOLIDUS
-from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, ROLLING_D_N_RELATIVE,
-                                             ROLLING_D_T_RELATIVE, Accuracy, Discretisation,
-                                             FreeSurface, Friction, Output, Penalty, Process,
-                                             Scales, Solver, Thermal)
+from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, D_N_RELATIVE, D_T_RELATIVE,
+                                             ROLLING_D_N_RELATIVE, ROLLING_D_T_RELATIVE, Accuracy,
+                                             Discretisation, FreeSurface, Friction, Output,
+                                             Penalty, Process, Scales, Solver, Thermal)
 from forming_fenicsx.config.strain_profile import check_section, read_strain_profile
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import TIMES, Units
@@ -87,12 +87,9 @@ class Scene:
             raise SceneError("material", f"gives the flow stress {scales.flow_stress} at the "
                              f"process strain rate {scales.strain_rate:.6g}: it must be a finite "
                              "number > 0")
-        if self.process.kind == "rolling":
-            self.penalty.resolve(scales, ROLLING_D_N_RELATIVE)
-            self.friction.resolve(scales, ROLLING_D_T_RELATIVE)
-        else:
-            self.penalty.resolve(scales)
-            self.friction.resolve(scales)
+        rolling = self.process.kind == "rolling"
+        self.penalty.resolve(scales, ROLLING_D_N_RELATIVE if rolling else D_N_RELATIVE)
+        self.friction.resolve(scales, ROLLING_D_T_RELATIVE if rolling else D_T_RELATIVE)
         relative = (MESH_SIZE_RELATIVE_3D if self.geometry.three_dimensional
                     else MESH_SIZE_RELATIVE[self.process.kind])
         self.discretisation.resolve(self.geometry.thinnest, relative)
@@ -168,9 +165,8 @@ class Scene:
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
         self._check_free_surface()
-        law = self.friction
-        if self.process.kind == "rolling" and (law.m if law.law == "factor" else law.mu) <= 0:
-            key = "friction.m" if law.law == "factor" else "friction.mu"
+        if self.process.kind == "rolling" and self.friction.coefficient <= 0:
+            key = "friction.m" if self.friction.law == "factor" else "friction.mu"
             raise SceneError(key, "must be > 0 for rolling: the rolls draw the strip in by "
                              "friction alone, and a frictionless bite has no steady state")
         if self.process.kind == "rolling" and self.accuracy.target is not None:

@@ -112,6 +112,11 @@ class Friction:
     normal_stress: str = "averaged"
     mollification_length: float | None = None
 
+    @property
+    def coefficient(self) -> float:
+        """The law's coefficient: m of the factor law, mu of Coulomb's (0: no friction)."""
+        return self.m if self.law == "factor" else self.mu
+
     def resolve(self, scales: Scales, d_T_relative: float = D_T_RELATIVE) -> None:
         set_pair("friction", self, "d_T", scales.velocity, d_T_relative)
 

@@ -123,7 +123,7 @@ class FlowProblem:
 
         self.has_contact = "gamma3_contact" in self.roles
         law = scene.friction
-        self.has_friction = self.has_contact and (law.m if law.law == "factor" else law.mu) > 0
+        self.has_friction = self.has_contact and law.coefficient > 0
         self.rolling = scene.process.kind == "rolling"
         process = scene.process
         self.has_force = ("gamma5_force" in self.roles and process.applied_force is not None) or (

@@ -34,7 +34,7 @@ def write_roll_plot(profile: dict, path: Path, heading: Heading, scene: Scene,
     ax.axhline(0.0, color="k", linewidth=0.6)
     g = scene.geometry
     for axes in (ax, slip):
-        for x, text in ((g.die_entry, "bite"), (g.die_exit, "roll gap")):
+        for x in (g.die_entry, g.die_exit):  # the bite and the roll gap
             axes.axvline(x, color="0.5", linestyle=":", linewidth=1)
         if math.isfinite(neutral_x):
             axes.axvline(neutral_x, color="tab:red", linestyle="--", linewidth=1,

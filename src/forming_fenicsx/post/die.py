@@ -93,7 +93,8 @@ def _zone(problem: FlowProblem, pressure: Expr, cone: Expr | float) -> dict[str,
     return problem.comm.bcast(zone, root=0)
 
 
-def die_scalars(problem: FlowProblem) -> dict[str, float]:
+def die_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None = None
+                ) -> dict[str, float]:
     """q_av over the contact zone's part in the die from its entry to the land (the paper's mean
     die pressure; over all of Gamma3 for a user's mesh), the contact length (contact_zone.py:
     the facets inside the zone count whole, however finely the die is described), and the x
@@ -103,7 +104,7 @@ def die_scalars(problem: FlowProblem) -> dict[str, float]:
     cone = 1.0 if g.mesh_file else ufl.conditional(
         ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     zone = _zone(problem, die_pressure(problem), cone)
-    profile = die_profile(problem)
+    profile = die_profile(problem) if profile is None else profile
     end = None
     if profile is not None:
         pressure = profile["contact_pressure"]

@@ -30,9 +30,9 @@ def thermal_scalars(problem: FlowProblem, numbers: dict[str, float]) -> dict[str
     else:
         force = numbers["ram_force"] if "ram_force" in numbers else numbers["drawing_force"]
         power = force * problem.scene.process.velocity
-    if problem.has_force and not problem.rolling:
-        power += integrate(problem, problem.scene.process.applied_force
-                           * ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma5_force"]))
+        if problem.has_force:
+            power += integrate(problem, problem.scene.process.applied_force
+                               * ufl.dot(problem.u, problem.n) * problem.ds(ROLES["gamma5_force"]))
     balance = field.energy_balance(power)
     profile = exit_profile(problem, field.T)
     extremes = problem.comm.bcast(

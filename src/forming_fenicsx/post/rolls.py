@@ -17,6 +17,7 @@ import ufl
 
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.physics.friction import tangential
 from forming_fenicsx.post.integrals import integrate
 
 
@@ -66,8 +67,7 @@ def power_balance(problem: FlowProblem) -> dict[str, float]:
     friction = 0.0
     if problem.has_friction:
         traction = traction + problem.friction_traction()
-        slip = problem.slip(problem.u)
-        slip_T = slip - ufl.dot(slip, n) * n
+        slip_T = tangential(problem.slip(problem.u), n)
         friction = integrate(problem, problem.friction_coefficient() * ufl.dot(slip_T, slip_T) * ds)
     e = problem.strain_rate(problem.u)
     deviatoric = 2.0 / 3.0 * problem.secant_coefficient() * c.deviatoric_product(e, e)
@@ -103,8 +103,8 @@ def neutral_point(x: np.ndarray, slip: np.ndarray) -> float:
 def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) -> dict[str, Any]:
     """Roll force (the separating force on each roll, per unit width), torque per roll and the
     rolls' power, the strip's entry and exit speeds, the forward slip S = v_1/v_R - 1, the neutral
-    point (x, and its angle from the line of the roll centres), the mean roll pressure over the
-    contact's projected length, and the power balance. ``profile``: die.die_profile on rank 0 with
+    point (x, and its angle from the line of the roll centres), the bite angle and the power
+    balance. ``profile``: die.die_profile on rank 0 with
     the slip column (collective; None on the other ranks)."""
     g, process = problem.scene.geometry, problem.scene.process
     v_R, R = process.velocity, g.roll_radius

@@ -49,9 +49,10 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
                    "mean_hydrostatic_pressure": mean_hydrostatic_pressure(problem)}
         if problem.scene.geometry.die != "square":
             process.update({**die_numbers(problem), **pass_shape(problem)})
-    elif problem.rolling:
+    elif problem.rolling:  # one die profile for the neutral point and the contact's end
+        profile = die_profile(problem)
         process = {"roll_force": die_separation_force(problem),
-                   **roll_scalars(problem, die_profile(problem)), **die_numbers(problem),
+                   **roll_scalars(problem, profile), **die_scalars(problem, profile),
                    **pass_shape(problem)}
     else:
         stress = force / exit_section(problem)
