@@ -93,18 +93,23 @@ def _zone(problem: FlowProblem, pressure: Expr, cone: Expr | float) -> dict[str,
     return problem.comm.bcast(zone, root=0)
 
 
-def die_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None = None
-                ) -> dict[str, float]:
+def die_scalars(problem: FlowProblem) -> dict[str, float]:
+    """die_scalars_of the die profile (die_profile; collective)."""
+    return die_scalars_of(problem, die_profile(problem))
+
+
+def die_scalars_of(problem: FlowProblem, profile: dict[str, np.ndarray] | None
+                   ) -> dict[str, float]:
     """q_av over the contact zone's part in the die from its entry to the land (the paper's mean
     die pressure; over all of Gamma3 for a user's mesh), the contact length (contact_zone.py:
     the facets inside the zone count whole, however finely the die is described), and the x
-    where the workpiece leaves the die (last node of Gamma3 with positive contact pressure)."""
+    where the workpiece leaves the die (last node of Gamma3 with positive contact pressure, from
+    ``profile``: die_profile's, on rank 0; None on the other ranks). Collective."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
     start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
     cone = 1.0 if g.mesh_file else ufl.conditional(
         ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     zone = _zone(problem, die_pressure(problem), cone)
-    profile = die_profile(problem) if profile is None else profile
     end = None
     if profile is not None:
         pressure = profile["contact_pressure"]

@@ -10,7 +10,7 @@ from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergen
                                               exit_zone_rate_ratio, free_surface_crossing,
                                               relative_divergence)
 from forming_fenicsx.post.die import (die_contact_fraction, die_profile, die_scalars,
-                                      die_scalars_3d)
+                                      die_scalars_3d, die_scalars_of)
 from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
@@ -52,7 +52,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     elif problem.rolling:  # one die profile for the neutral point and the contact's end
         profile = die_profile(problem)
         process = {"roll_force": die_separation_force(problem),
-                   **roll_scalars(problem, profile), **die_scalars(problem, profile),
+                   **roll_scalars(problem, profile), **die_scalars_of(problem, profile),
                    **pass_shape(problem)}
     else:
         stress = force / exit_section(problem)
