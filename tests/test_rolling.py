@@ -104,6 +104,26 @@ def test_a_bite_that_friction_cannot_draw_in_fails_with_its_reason():
                                                        rel=0.01)
 
 
+def test_a_strip_near_the_bite_limit_is_drawn_in_quickly():
+    """R/h1 = 100, 40 %, mu = 0.05 (dimensionless), 22 % above the slab's least mu: the neutral
+    point lies at 0.09 of the bite. Released after the viscous first solve alone, the entry speed
+    fell to 0.014 v_R and the run took 109 solves; held one solve longer (fem/entry_speed.py), it
+    converges in 11 with the slab's neutral point and forward slip."""
+    scene = scene_from_dict({
+        "process": {"kind": "rolling", "velocity": 1.0},
+        "geometry": {"entry_thickness": 1 / 0.6, "exit_thickness": 1.0, "roll_radius": 100.0},
+        "material": {"law": "piecewise_power", "A": math.sqrt(3.0) / 2.0},
+        "friction": {"mu": 0.05}, "output": {"fields": False, "figures": False}})
+    summary = solve_scene(scene)[2]
+    g, k = scene.geometry, scene.reference_flow_stress / math.sqrt(3.0)
+    slab = slab_rolling(g.roll_radius, g.entry_thickness, g.exit_thickness, k, 0.05)
+    assert bite_limit(g.roll_radius, g.entry_thickness, g.exit_thickness) == pytest.approx(
+        0.0411, rel=0.01)
+    assert summary["converged"] and summary["linear_solves"] <= 20
+    assert math.radians(summary["neutral_angle"]) == pytest.approx(slab.neutral_angle, rel=0.05)
+    assert summary["forward_slip"] == pytest.approx(slab.forward_slip, abs=0.005)
+
+
 def test_neutral_point_is_where_the_slip_changes_sign():
     import numpy as np
 

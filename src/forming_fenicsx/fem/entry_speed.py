@@ -5,10 +5,15 @@ Friction's bound tau_f is frozen from an earlier iterate (forms.FlowProblem.fric
 first solve, from a uniform modulus, would have no friction and a free x-translation. That solve
 holds Gamma1's x-velocity at a guess v_0 by the penalty traction -k (u_x - v_0) with k = 1/d_N,
 the contact's stiffness, without the tensions (``released`` 0 scales them: a front tension could
-pull the strip off the rolls in that viscous first solve, and leave no friction to hold it); the
-first freeze of the frozen coefficients, which takes the friction bound from that solve's contact
-pressure, releases it (k = 0, the tensions on), and every later iterate solves the problem with the
-entry speed free. The held iterate never counts as converged (``change`` is 1).
+pull the strip off the rolls in that viscous first solve, and leave no friction to hold it). With
+Coulomb friction the hold lasts two solves: the first freeze takes the friction bound mu sigma_N
+from the viscous solve's contact pressure, and the iterate solved with it is held too. Released
+after the viscous solve alone, a strip near the bite limit stopped (entry speed 0.014 v_R at
+R/h1 = 100, 40 %, mu = 0.05): the viscous pressure's friction could not draw it in, and 109
+solves brought it back; held one solve more, it converges in 11 (docs/rolling.md). The factor
+law's bound m k does not come from that pressure: its hold ends at the first freeze. Once
+released (k = 0, the tensions on), every iterate solves the problem with the entry speed free. A
+held iterate never counts as converged (``change`` is 1).
 """
 from __future__ import annotations
 
@@ -17,18 +22,20 @@ from petsc4py import PETSc
 
 
 class EntrySpeed:
-    """The hold of Gamma1's x-velocity at ``guess`` with the stiffness ``stiffness`` until the
-    first freeze (a frozen coefficient of the flow problem, frozen.py)."""
+    """The hold of Gamma1's x-velocity at ``guess`` with the stiffness ``stiffness`` for the
+    first ``held_solves`` solves (a frozen coefficient of the flow problem, frozen.py)."""
 
     name = "entry speed hold"
     coupled = False
     tangent = False
 
-    def __init__(self, mesh, guess: float, stiffness: float, ds_entry):
+    def __init__(self, mesh, guess: float, stiffness: float, ds_entry, held_solves: int):
         self.stiffness = dolfinx.fem.Constant(mesh, PETSc.ScalarType(stiffness))
         self.released = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.guess = dolfinx.fem.Constant(mesh, PETSc.ScalarType(guess))
         self.ds = ds_entry
+        self.held_solves = held_solves
+        self.freezes = 0  # since the hold began
 
     @property
     def held(self) -> bool:
@@ -47,16 +54,18 @@ class EntrySpeed:
         return 0.5 * self.stiffness * (u[0] - self.guess) ** 2 * self.ds
 
     def freeze(self, u: dolfinx.fem.Function) -> None:
-        self.stiffness.value, self.released.value = 0.0, 1.0
+        self.freezes += 1
+        if self.freezes >= self.held_solves:
+            self.settle(u)
 
     def settle(self, u: dolfinx.fem.Function) -> None:
-        self.freeze(u)
+        self.stiffness.value, self.released.value = 0.0, 1.0
 
     def change(self, u: dolfinx.fem.Function) -> float:
         return 1.0 if self.held else 0.0
 
     def snapshot(self) -> object:
-        return float(self.stiffness.value), float(self.released.value)
+        return float(self.stiffness.value), float(self.released.value), self.freezes
 
     def restore(self, saved: object) -> None:
-        self.stiffness.value, self.released.value = saved
+        self.stiffness.value, self.released.value, self.freezes = saved

@@ -152,13 +152,15 @@ class FlowProblem:
                     law.mollification_length, "averaged_normal_stress",
                     "normal_stress_filter")
                 self.friction_state.derived.append(self.normal_stress_average)
-        # rolling: the entry speed is the flow's, held at a guess until the first freeze
+        # rolling: the entry speed is the flow's, held at a guess for the first solves (two with
+        # Coulomb's bound, which the first freeze takes from the viscous solve's pressure)
         self.entry_speed: EntrySpeed | None = None
         if self.rolling:
             g = scene.geometry
             self.entry_speed = EntrySpeed(mesh, process.velocity * g.exit_thickness
                                           / g.entry_thickness, 1.0 / scene.penalty.d_N,
-                                          self.ds(ROLES["gamma1_velocity"]))
+                                          self.ds(ROLES["gamma1_velocity"]),
+                                          held_solves=2 if scene.friction.law == "coulomb" else 1)
             self.frozen.append(self.entry_speed)
 
         if self.mixed:
