@@ -8,9 +8,10 @@ the contact's stiffness, without the tensions (``released`` 0 scales them: a fro
 pull the strip off the rolls in that viscous first solve, and leave no friction to hold it). With
 Coulomb friction the hold lasts two solves: the first freeze takes the friction bound mu sigma_N
 from the viscous solve's contact pressure, and the iterate solved with it is held too. Released
-after the viscous solve alone, a strip near the bite limit stopped (entry speed 0.014 v_R at
-R/h1 = 100, 40 %, mu = 0.05): the viscous pressure's friction could not draw it in, and 109
-solves brought it back; held one solve more, it converges in 11 (docs/rolling.md). The factor
+after the viscous solve alone, a strip near the bite limit stopped: at R/h1 = 100, 40 %, mu =
+0.05 its entry speed fell to 0.014 v_R and 109 solves brought it back (11 held one solve more);
+at R/h1 = 50, 30 %, mu = 0.05 the run failed with the bite message though slab theory rolls it
+(13 solves held; docs/rolling.md). The factor
 law's bound m k does not come from that pressure: its hold ends at the first freeze. Once
 released (k = 0, the tensions on), every iterate solves the problem with the entry speed free. A
 held iterate never counts as converged (``change`` is 1).
