@@ -7,11 +7,8 @@ holds Gamma1's x-velocity at a guess v_0 by the penalty traction -k (u_x - v_0) 
 the contact's stiffness, without the tensions (``released`` 0 scales them: a front tension could
 pull the strip off the rolls in that viscous first solve, and leave no friction to hold it). With
 Coulomb friction the hold lasts two solves: the first freeze takes the friction bound mu sigma_N
-from the viscous solve's contact pressure, and the iterate solved with it is held too. Released
-after the viscous solve alone, a strip near the bite limit stopped: at R/h1 = 100, 40 %, mu =
-0.05 its entry speed fell to 0.014 v_R and 109 solves brought it back (11 held one solve more);
-at R/h1 = 50, 30 %, mu = 0.05 the run failed with the bite message though slab theory rolls it
-(13 solves held; docs/rolling.md). The factor
+from the viscous solve's contact pressure, and the iterate solved with it is held too (released
+after the viscous solve alone, strips near the bite limit stopped: docs/rolling.md). The factor
 law's bound m k does not come from that pressure: its hold ends at the first freeze. Once
 released (k = 0, the tensions on), every iterate solves the problem with the entry speed free. A
 held iterate never counts as converged (``change`` is 1).
