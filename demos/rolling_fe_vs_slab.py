@@ -6,16 +6,15 @@
 # sticking (the FE's friction factor m = 1 against the slab's tau = k): the roll force, torque per
 # roll, neutral angle and forward slip of the FE model (process.kind = "rolling", every numerical
 # setting its default) beside the von Karman slab solution for rigid rolls
-# (forming_fenicsx.physics.rolling_slab), both dimensionless: exit thickness h1 = 1, the shear flow
-# stress k of the FE law at its reference strain rate (law (4.5) with alpha = 1e-3: nearly rate
-# independent; its rate1 = RATE1, below which the law is viscous, 1e-5 of the process strain rate
-# v_R/h1 as in the demo strip's mm and s, not the paper's 1e-3, which in these units is near the
-# rates of the strip's almost rigid parts), no tensions; the sticking rows also beside Sims'
+# (forming_fenicsx.physics.rolling_slab), both dimensionless: exit thickness h1 = 1, the shear
+# flow stress k of the FE law at its reference strain rate (law (4.5) with alpha = 1e-3: nearly
+# rate independent; its rate1 = RATE1, below which the law is viscous, 1e-5 of the process strain
+# rate v_R/h1 as in the demo strip's mm and s, not the paper's 1e-3, which in these units is near
+# the rates of the strip's almost rigid parts), no tensions; the sticking rows also beside Sims'
 # published theory (1954). Mean roll pressure P/(2k L), torque G/(2k L^2), L the projected contact
-# length. Writes fe_vs_slab.json,
-# fe_vs_slab.md and fe_vs_slab.png into --out, and friction_hills.png: the FE's and the slab's
-# roll pressure and friction stress along the arc at R/h1 = 200, 20 %, mu = 0.1 and 0.3.
-# docs/rolling.md shows a run. --quick: two points, no hills
+# length. Writes fe_vs_slab.json, fe_vs_slab.md and fe_vs_slab.png into --out, and
+# friction_hills.png: the FE's and the slab's roll pressure and friction stress along the arc at
+# R/h1 = 200, 20 %, mu = 0.1 and 0.3. docs/rolling.md shows a run. --quick: two points, no hills
 # (tests/test_rolling.py runs it).
 
 import argparse

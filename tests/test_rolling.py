@@ -30,6 +30,17 @@ def _strip(*overrides: str):
     return load_scene(STRIP, [*COARSE, *overrides])
 
 
+def _dimensionless(radius: float, reduction: float, friction: dict):
+    """A strip of exit thickness 1 rolled at speed 1, as demos/rolling_fe_vs_slab.py's grid: k =
+    1/2, law (4.5) with rate1 = 1e-5 of the process rate (the grid's RATE1)."""
+    return scene_from_dict({
+        "process": {"kind": "rolling", "velocity": 1.0},
+        "geometry": {"entry_thickness": 1 / (1 - reduction), "exit_thickness": 1.0,
+                     "roll_radius": radius},
+        "material": {"law": "piecewise_power", "A": math.sqrt(3.0) / 2.0, "rate1": 1e-5},
+        "friction": friction, "output": {"fields": False, "figures": False}})
+
+
 @pytest.fixture(scope="module")
 def plain():
     """The demo strip without tensions: its summary."""
@@ -110,11 +121,7 @@ def test_a_strip_near_the_bite_limit_is_drawn_in():
     viscous first solve alone, the strip stopped and the run failed with the bite message; held one
     solve longer (fem/entry_speed.py), it converges in 13 solves with the neutral point at 0.031
     of the bite."""
-    scene = scene_from_dict({
-        "process": {"kind": "rolling", "velocity": 1.0},
-        "geometry": {"entry_thickness": 1 / 0.7, "exit_thickness": 1.0, "roll_radius": 50.0},
-        "material": {"law": "piecewise_power", "A": math.sqrt(3.0) / 2.0, "rate1": 1e-5},
-        "friction": {"mu": 0.05}, "output": {"fields": False, "figures": False}})
+    scene = _dimensionless(50.0, 0.3, {"mu": 0.05})
     summary = solve_scene(scene)[2]
     g, k = scene.geometry, scene.reference_flow_stress / math.sqrt(3.0)
     slab = slab_rolling(g.roll_radius, g.entry_thickness, g.exit_thickness, k, 0.05)
@@ -252,12 +259,7 @@ def test_sticking_rolls_as_sims_published_theory_says():
     Orowan's theory with sticking: P = 2k sqrt(R dh) Q_p), the neutral angle's share of the bite
     0.438 against his 0.439, and 8 % below the homogeneous slab solution, whose yield condition
     leaves the shear out (docs/rolling.md, "A published theory")."""
-    scene = scene_from_dict({
-        "process": {"kind": "rolling", "velocity": 1.0},
-        "geometry": {"entry_thickness": 1 / 0.7, "exit_thickness": 1.0, "roll_radius": 200.0},
-        "material": {"law": "piecewise_power", "A": math.sqrt(3.0) / 2.0, "rate1": 1e-5},
-        "friction": {"law": "factor", "m": 1.0},
-        "output": {"fields": False, "figures": False}})
+    scene = _dimensionless(200.0, 0.3, {"law": "factor", "m": 1.0})
     summary = solve_scene(scene)[2]
     g, k = scene.geometry, scene.reference_flow_stress / math.sqrt(3.0)
     sims = sims_sticking(g.roll_radius, g.entry_thickness, g.exit_thickness)

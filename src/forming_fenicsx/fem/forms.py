@@ -160,7 +160,7 @@ class FlowProblem:
             self.entry_speed = EntrySpeed(mesh, process.velocity * g.exit_thickness
                                           / g.entry_thickness, 1.0 / scene.penalty.d_N,
                                           self.ds(ROLES["gamma1_velocity"]),
-                                          held_solves=2 if scene.friction.law == "coulomb" else 1)
+                                          held_solves=2 if law.law == "coulomb" else 1)
             self.frozen.append(self.entry_speed)
 
         if self.mixed:
