@@ -1,6 +1,7 @@
 # # Flat rolling: the finite-element model against slab theory over issue 39's grid
 #
 #     python demos/rolling_fe_vs_slab.py [--out results/rolling_fe_vs_slab] [--quick]
+#         [--point R/h1 REDUCTION MU ...] [--set SECTION.KEY=VALUE ...]
 #
 # For R/h1 from 10 to 200, reductions from 10 to 40 % and Coulomb mu from 0.05 to 0.3, and
 # sticking (the FE's friction factor m = 1 against the slab's tau = k): the roll force, torque per
@@ -15,7 +16,8 @@
 # length. Writes fe_vs_slab.json, fe_vs_slab.md and fe_vs_slab.png into --out, and
 # friction_hills.png: the FE's and the slab's roll pressure and friction stress along the arc at
 # R/h1 = 200, 20 %, mu = 0.1 and 0.3. docs/rolling.md shows a run. --quick: two points, no hills
-# (tests/test_rolling.py runs it).
+# (tests/test_rolling.py runs it); --point: the points given, no hills; --set: a scene setting
+# over every point's (the rows record it), as docs/rolling.md's single-point measurements.
 
 import argparse
 import json
@@ -43,8 +45,9 @@ QUICK = ((10.0, 0.2, 0.2), (50.0, 0.2, 0.1))
 RATE1 = 1e-5
 
 
-def scene_of(ratio: float, reduction: float, friction, **settings):
-    """The dimensionless rolling scene of one grid point (h1 = 1, roll speed 1)."""
+def scene_of(ratio: float, reduction: float, friction, settings: dict | None = None):
+    """The dimensionless rolling scene of one grid point (h1 = 1, roll speed 1), ``settings``
+    ({section: {key: value}}) over it."""
     law = ({"law": "factor", "m": 1.0} if friction == "sticking"
            else {"law": "coulomb", "mu": friction})
     data = {"process": {"kind": "rolling", "velocity": 1.0},
@@ -52,7 +55,7 @@ def scene_of(ratio: float, reduction: float, friction, **settings):
                          "roll_radius": ratio},
             "material": {"law": "piecewise_power", "A": math.sqrt(3.0) / 2.0, "rate1": RATE1},
             "friction": law, "output": {"fields": False, "figures": False}}
-    for section, values in settings.items():
+    for section, values in (settings or {}).items():
         data.setdefault(section, {}).update(values)
     return scene_from_dict(data)
 
@@ -99,10 +102,11 @@ def fe_numbers(scene) -> dict:
             "wall_time_s": time.perf_counter() - start}
 
 
-def point(ratio: float, reduction: float, friction) -> dict:
+def point(ratio: float, reduction: float, friction, settings: dict | None = None) -> dict:
     """One grid point: the scene's data, the slab's and the FE's numbers."""
-    scene = scene_of(ratio, reduction, friction)
-    row = {"R/h1": ratio, "reduction": reduction, "friction": friction,
+    scene = scene_of(ratio, reduction, friction, settings)
+    row = {"R/h1": ratio, "reduction": reduction, "friction": friction, **(
+        {"settings": settings} if settings else {}),
            "bite_angle_deg": scene.geometry.die_angle,
            "h_mean/L": 0.5 * (scene.geometry.entry_thickness + 1.0) / scene.geometry.cone_length}
     return {**row, **slab_numbers(scene, friction), **fe_numbers(scene)}
@@ -205,12 +209,25 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("results/rolling_fe_vs_slab"))
     parser.add_argument("--quick", action="store_true", help="two points only")
+    parser.add_argument("--point", nargs=3, action="append", metavar=("R/h1", "REDUCTION", "MU"),
+                        help="this point only (MU a number or 'sticking'; repeatable)")
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                        help="a scene setting over every point's (repeatable)")
     args = parser.parse_args()
     grid = QUICK if args.quick else [(ratio, reduction, friction) for ratio in RATIOS
                                      for reduction in REDUCTIONS for friction in FRICTIONS]
+    if args.point:
+        grid = [(float(ratio), float(reduction), mu if mu == "sticking" else float(mu))
+                for ratio, reduction, mu in args.point]
+    settings: dict = {}
+    for item in args.set:
+        key, value = item.split("=", 1)
+        section, name = key.split(".", 1)
+        settings.setdefault(section, {})[name] = json.loads(value) if value[:1].isdigit() \
+            or value[:1] in "-[{" or value in ("true", "false") else value
     rows = []
     for ratio, reduction, friction in grid:
-        rows.append(point(ratio, reduction, friction))
+        rows.append(point(ratio, reduction, friction, settings))
         if MPI.COMM_WORLD.rank == 0:
             print(json.dumps(rows[-1]), flush=True)
     if MPI.COMM_WORLD.rank == 0:
@@ -219,7 +236,7 @@ def main() -> None:
         (args.out / "fe_vs_slab.md").write_text(table(rows) + "\n")
         plot(rows, args.out / "fe_vs_slab.png")
         print(table(rows))
-    if not args.quick:
+    if not (args.quick or args.point):
         hills(args.out / "friction_hills.png")
 
 

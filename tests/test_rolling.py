@@ -190,7 +190,8 @@ def test_tensions_belong_to_rolling():
 
 
 def test_the_fe_against_slab_demo_runs(shared_tmp, monkeypatch):
-    """demos/rolling_fe_vs_slab.py --quick: its table, JSON and figure (two grid points)."""
+    """demos/rolling_fe_vs_slab.py --quick: its table, JSON and figure (two grid points); then
+    one point with --set: the paper's rate1 = 1e-3 gives a roll force 0.3 % below the grid's."""
     out = shared_tmp / "grid"
     monkeypatch.setattr(sys, "argv", ["rolling_fe_vs_slab.py", "--quick", "--out", str(out)])
     runpy.run_path(str(DEMOS / "rolling_fe_vs_slab.py"), run_name="__main__")
@@ -200,6 +201,14 @@ def test_the_fe_against_slab_demo_runs(shared_tmp, monkeypatch):
         thin = next(row for row in rows if row["R/h1"] == 50.0)
         assert thin["fe_torque"] == pytest.approx(thin["slab_torque"], rel=0.03)
         assert (out / "fe_vs_slab.png").stat().st_size > 0
+    # one point with a setting over the grid's: law (4.5)'s paper rate1 lowers the roll force
+    monkeypatch.setattr(sys, "argv", ["rolling_fe_vs_slab.py", "--point", "50", "0.2", "0.1",
+                                      "--set", "material.rate1=0.001", "--out", str(out / "one")])
+    runpy.run_path(str(DEMOS / "rolling_fe_vs_slab.py"), run_name="__main__")
+    if MPI.COMM_WORLD.rank == 0:
+        (one,) = json.loads((out / "one" / "fe_vs_slab.json").read_text())
+        assert one["settings"] == {"material": {"rate1": 0.001}} and one["fe_converged"]
+        assert one["fe_pressure"] < 0.999 * thin["fe_pressure"]
 
 
 def test_roll_rpm_gives_the_surface_speed():
