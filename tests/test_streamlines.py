@@ -49,6 +49,29 @@ def test_points_outside_the_mesh():
     assert values[:, 0] == pytest.approx([2.2, 3.5, 0.6])
 
 
+def test_points_far_outside_a_distorted_mesh():
+    """The unit square (Q1, 2 x 2 cells) with its middle node moved to (0.8, 0.75), so that no cell
+    is a parallelogram: the point far up and right cannot be pulled back into its nearest cell
+    (dolfinx stopped the run with "Newton method failed to converge for non-affine geometry", a
+    swelling extrudate's streamline met it); it is moved onto that cell. The one far left can, and
+    its cell's polynomial is extended to it. f = 2x + 3y is exact everywhere: x and y are
+    themselves Q1 in the reference cell."""
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 2, 2,
+                                           dolfinx.mesh.CellType.quadrilateral)
+    x = mesh.geometry.x
+    x[np.isclose(x[:, 0], 0.5) & np.isclose(x[:, 1], 0.5), :2] = [0.8, 0.75]
+    f = dolfinx.fem.Function(function_space(mesh, "P", 1))
+    f.interpolate(lambda p: 2 * p[0] + 3 * p[1])
+    evaluate = PointValues([f])
+    points = np.array([[0.3, 0.2], [40.0, 60.0], [-30.0, 0.5]])
+    values, where = evaluate.evaluate(points, outside="extend")
+    assert evaluate.missed == 2
+    assert where[0] == pytest.approx(points[0]) and values[0, 0] == pytest.approx(1.2)
+    assert where[1] == pytest.approx([1.0, 1.0], abs=1e-12)
+    assert where[2] == pytest.approx(points[2])
+    assert values[1:, 0] == pytest.approx(2 * where[1:, 0] + 3 * where[1:, 1], abs=1e-9)
+
+
 def test_streamlines_on_the_exact_cone():
     """Swift (prestrain 0.02, n 0.3) entering at 0.1 through the smooth cone, Q2 on 8 cells,
     Newton: the strain traced from the exit cap back to the entry cap at 9 angles from the axis to

@@ -17,7 +17,7 @@ from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape, wall_area
 from forming_fenicsx.mesh.geometry import shaped_mesh
-from forming_fenicsx.post.free_surface import shape_change, updated_shape
+from forming_fenicsx.post.free_surface import relaxed, shape_change, updated_shape
 from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
@@ -40,8 +40,10 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     updates: list[dict[str, Any]] = []
     solves, moved, converged = summary["linear_solves"], 0, False
     while summary["iteration_converged"]:
-        new = updated_shape(problem, shape, summary["contact_end_x"])
-        move = shape_change(shape, new, scene.geometry.length) / h1
+        traced = updated_shape(problem, shape, summary["contact_end_x"])
+        # the stop reads the whole move to the streamline; the next shape takes its share of it
+        move = shape_change(shape, traced, scene.geometry.length) / h1
+        new = relaxed(shape, traced, settings.relaxation)
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],

@@ -7,7 +7,11 @@ in no cell (past a curved wall whose element edges differ from mesh to mesh, or 
 beyond the wall it follows) takes the cell nearest to it, on the rank whose cell is the nearest:
 its polynomial extended beyond the cell (``outside="extend"``), or the point moved onto that
 cell's boundary (``outside="onto_cell"``: the nearest point of the polygon through its boundary
-nodes, the cell's edges where they are straight).
+nodes, the cell's edges where they are straight). A quadrilateral's map to its reference cell is
+not affine and cannot be inverted far outside it (dolfinx's pull-back stops: "Newton method failed
+to converge for non-affine geometry"); such a point is moved onto the cell as for "onto_cell",
+and where even that fails (a distorted cell) it takes the cell's nearest node (a swelling
+extrudate's streamline, traced above the last mesh's surface, met both).
 """
 from __future__ import annotations
 
@@ -53,7 +57,7 @@ class PointValues:
         found = cells >= 0
         local = np.zeros((len(points), self.width))
         if found.any():
-            local[found] = self._values(padded[found], cells[found])
+            local[found] = self._values_near(padded[found], cells[found])[1]
         count = self._summed(found.astype(float))
         values = self._summed(local) / np.maximum(count, 1.0)[:, None]
         where = np.array(points, dtype=float)
@@ -76,8 +80,42 @@ class PointValues:
             where[mine] = self._onto(points[mine, :2], cells[mine]) if onto else points[mine, :2]
             padded = np.zeros((int(mine.sum()), 3))
             padded[:, :2] = where[mine]
-            values[mine] = self._values(padded, cells[mine])
+            where[mine], values[mine] = self._values_near(padded, cells[mine])
         return self._summed(where), self._summed(values)
+
+    def _values_near(self, points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where and what each cell gives at its point (N, 3): at the point where the cell's map
+        can be inverted there, else at the point moved onto the cell's outline (_onto; module
+        docstring). One batch, or one point at a time once the batch has failed."""
+        try:
+            return points[:, :2].copy(), self._values(points, cells)
+        except RuntimeError:  # a pull-back beyond a non-affine cell
+            pass
+        where, values = points[:, :2].copy(), np.zeros((len(points), self.width))
+        for i in range(len(points)):
+            try:
+                values[i] = self._values(points[i:i + 1], cells[i:i + 1])[0]
+            except RuntimeError:
+                where[i] = self._onto(points[i:i + 1, :2], cells[i:i + 1])[0]
+                moved = np.zeros((1, 3))
+                moved[0, :2] = where[i]
+                try:
+                    values[i] = self._values(moved, cells[i:i + 1])[0]
+                except RuntimeError:  # a cell too distorted to invert even there: its nearest node
+                    where[i], values[i] = self._at_node(where[i], int(cells[i]))
+        return where, values
+
+    def _at_node(self, point: np.ndarray, cell: int) -> tuple[np.ndarray, np.ndarray]:
+        """The cell's degree of freedom nearest to the point (x, y): where it is and the functions'
+        values there (their Lagrange coefficients)."""
+        found = []
+        for f in self._functions:
+            space, size = f.function_space, f.function_space.dofmap.index_map_bs
+            dofs = space.dofmap.cell_dofs(cell)
+            coordinates = space.tabulate_dof_coordinates()[dofs, :2]
+            nearest = int(np.argmin(np.sum((coordinates - point) ** 2, axis=1)))
+            found.append(f.x.array[dofs[nearest] * size:(dofs[nearest] + 1) * size])
+        return coordinates[nearest], np.concatenate(found)
 
     def _onto(self, points: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Each point (N, 2) moved to the nearest point of its cell's outline: on the segment a-b

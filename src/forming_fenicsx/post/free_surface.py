@@ -94,6 +94,18 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) 
     return FreeShape(wall, downstream)
 
 
+def relaxed(old: FreeShape, new: FreeShape, relaxation: float) -> FreeShape:
+    """``new`` with its product surface moved only ``relaxation`` of the way from ``old``'s,
+    y = y_old + relaxation (y_new - y_old) at the new surface's x, from where its contact ends
+    (that point stays on the wall)."""
+    if relaxation == 1.0:
+        return new
+    downstream = new.downstream.copy()
+    x = downstream[1:, 0]
+    downstream[1:, 1] = old.height(x) + relaxation * (downstream[1:, 1] - old.height(x))
+    return FreeShape(new.wall, downstream)
+
+
 def shape_change(old: FreeShape, new: FreeShape, length: float, points: int = 2001) -> float:
     """The largest difference in y between two top boundaries over x in [0, length]."""
     x = np.linspace(0.0, length, points)
