@@ -101,7 +101,9 @@ class Friction:
     "factor", tau_f = m k with k = sigma_p/sqrt(3) the workpiece's shear flow stress (0 <= m <= 1).
 
     Coulomb's bound uses the averaged (mollified) normal stress over ``mollification_length``
-    (default: the mesh size), or the local penalty stress of (3.4).
+    (default: the mesh size), or the local penalty stress of (3.4). ``shear_limit`` caps it at the
+    shear flow stress, tau_f = min(mu sigma_N-bar, k) (rolling's default; off elsewhere, the
+    paper's law: docs/rolling.md); the factor law never exceeds k.
     """
 
     law: str = "coulomb"
@@ -111,6 +113,7 @@ class Friction:
     d_T_relative: float | None = None
     normal_stress: str = "averaged"
     mollification_length: float | None = None
+    shear_limit: bool = False
 
     @property
     def coefficient(self) -> float:

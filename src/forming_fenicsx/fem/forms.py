@@ -280,12 +280,15 @@ class FlowProblem:
         return self.friction_normal_stress()
 
     def friction_bound(self):
-        """tau_f at the friction state: Coulomb's mu sigma_N-bar or the factor law's m k
-        (friction.py)."""
+        """tau_f at the friction state: Coulomb's mu sigma_N-bar, capped at k with
+        friction.shear_limit, or the factor law's m k (friction.py)."""
         law = self.scene.friction
         if law.law == "factor":
             return friction.factor_bound(law.m, self.flow_stress(self.friction_state.state))
-        return friction.coulomb_bound(law.mu, self.normal_pressure())
+        bound = friction.coulomb_bound(law.mu, self.normal_pressure())
+        if law.shear_limit:
+            return friction.shear_limited(bound, self.flow_stress(self.friction_state.state))
+        return bound
 
     def friction_coefficient(self):
         """Slip coefficient tau_f/sqrt(|u_state,T|^2 + d_T^2) of the regularised friction."""

@@ -28,6 +28,12 @@ def factor_bound(m: float, flow_stress):
     return m * flow_stress / 3.0**0.5
 
 
+def shear_limited(bound, flow_stress):
+    """tau_f = min(bound, k), k = sigma_p / sqrt(3): a Coulomb bound capped at the shear flow
+    stress, beyond which the metal under the surface shears instead of the surface slipping."""
+    return ufl.min_value(bound, flow_stress / 3.0**0.5)
+
+
 def slip_coefficient(tau_f, u_state, n, d_T: float):
     """tau_f / sqrt(|u_T|^2 + d_T^2): the secant of the regularised friction traction."""
     slip = tangential(u_state, n)
