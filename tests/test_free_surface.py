@@ -21,36 +21,48 @@ from forming_fenicsx.app.run import run_scene, solve_scene
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.post.free_surface import slope_field, streamline
+from forming_fenicsx.mesh.quality import folded_cells
+from forming_fenicsx.post.free_surface import flux_surface
 from forming_fenicsx.post.sanity import free_surfaces
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 ROD = DEMOS / "aluminium_rod_cold.toml"
 SWELL = DEMOS / "newtonian_extrudate_swell.toml"
 EXAMPLE2 = DEMOS / "example2_drawing.toml"
-A, K = 0.1, 2.0  # the field u = (1, A K cos(K x)): streamlines y = y0 + A sin(K x)
+A, K = 0.1, 2.0  # the verification field's streamlines y = c (1 + A sin(K x))
 
 
-def _streamline_error(degree: int, cells: int) -> float:
+def _surface_error(degree: int, cells: int, axisymmetric: bool) -> float:
+    """The flux surface through (0, 0.5) of a field with the streamlines y = c s(x), s = 1 + A
+    sin(K x), and the axis y = 0 among them (stream function y/s, or y^2/(2 s^2) axisymmetric),
+    interpolated on Q1 or Q2 over [0, 2] x [0, 1], against the exact y = 0.5 s(x)."""
     mesh = dolfinx.mesh.create_rectangle(
         MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([2.0, 1.0])], [2 * cells, cells],
         dolfinx.mesh.CellType.quadrilateral)
     u = dolfinx.fem.Function(function_space(mesh, "P", degree, (2,)))
-    u.interpolate(lambda p: np.vstack([np.ones(p.shape[1]), A * K * np.cos(K * p[0])]))
-    line, on_wall = streamline(slope_field(u), (0.0, 0.5), 2.0, 0.25 / cells)
+    power = 2 if axisymmetric else 1
+
+    def field(p):
+        s, ds = 1 + A * np.sin(K * p[0]), A * K * np.cos(K * p[0])
+        return np.vstack([s ** -power, p[1] * ds * s ** (-power - 1)])
+
+    u.interpolate(field)
+    line, on_wall = flux_surface(u, np.ones_like, (0.0, 0.5), 2.0, 0.25 / cells, axisymmetric)
     assert on_wall is None
-    return float(np.abs(line[:, 1] - 0.5 - A * np.sin(K * line[:, 0])).max())
+    return float(np.abs(line[:, 1] - 0.5 * (1 + A * np.sin(K * line[:, 0]))).max())
 
 
-@pytest.mark.parametrize("degree, order", [(1, 2.0), (2, 4.0)])
-def test_surface_streamline_converges_with_the_elements_order(degree, order):
-    """The streamline through (0, 0.5) of the field interpolated on Q1 and Q2 (4, 8, 16 cells
-    across) against y = 0.5 + A sin(K x): observed orders 2.00, 2.00 (Q1) and 3.98, 4.00 (Q2,
-    the interpolant's nodal superconvergence along x); the Q2 error 5.5e-8 on 16 cells."""
-    errors = [_streamline_error(degree, cells) for cells in (4, 8, 16)]
+@pytest.mark.parametrize("degree, order", [(1, 2.0), (2, 3.0)])
+@pytest.mark.parametrize("axisymmetric", [False, True])
+def test_the_surface_converges_to_the_exact_streamline_with_the_elements_order(
+        degree, order, axisymmetric):
+    """The flux surface of the field interpolated on Q1 and Q2 (4, 8, 16 cells across) against
+    the exact streamline: observed orders 1.98, 2.00 (Q1) and 2.99, 3.01 (Q2), plane; 1.98, 2.00
+    and 3.03, 2.99 axisymmetric; on 16 cells 9.8e-5 (Q1) and 8.4e-7, 9.1e-7 (Q2)."""
+    errors = [_surface_error(degree, cells, axisymmetric) for cells in (4, 8, 16)]
     orders = np.log2(np.array(errors[:-1]) / errors[1:])
     assert orders == pytest.approx([order, order], abs=0.1)
-    assert errors[-1] < (2e-4 if degree == 1 else 1e-7)
+    assert errors[-1] < (2e-4 if degree == 1 else 2e-6)
 
 
 def _rod(land: float, update: bool = True):
@@ -66,8 +78,8 @@ def _solve(scene):
 def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline():
     """The cold aluminium rod, 20 -> 12 mm through its 30 degree die with no land (0.6 mm mesh):
     the product leaves the die at its exit corner and goes on converging. One update: the
-    product is 0.64 % under the die's 12 mm, the crossing falls from 1.28 % to 0.44 %, and the
-    next update would move the surface by 3.8e-4 of the exit radius (measured; the narrowing
+    product is 0.63 % under the die's 12 mm, the crossing falls from 1.28 % to 0.45 %, and the
+    next update would move the surface by 4.9e-4 of the exit radius (measured; the narrowing
     halves with the mesh size, docs/free_surface.md)."""
     scene = _rod(0.0)
     problem, _, summary, shape = _solve(scene)
@@ -80,7 +92,7 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
     assert all(row["wall_time_s"] > 0 for row in history) and len(history) == 2
     assert table["contact_end_x"] == pytest.approx(scene.geometry.die_exit)
     assert shape.downstream[0] == pytest.approx(scene.geometry.profile().end)
-    # the product narrows within an element of the corner, then runs level (to 2e-8 of 6 mm)
+    # the product narrows within an element of the corner, then runs level (to 4e-7 of 6 mm)
     assert np.all(np.diff(shape.downstream[:, 1]) <= 1e-6)
     # the drawing stress's section and the product's profile read the product's own size
     assert 2 * shape.exit_height == pytest.approx(table["exit_diameter"])
@@ -88,17 +100,16 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
 
 def test_a_newtonian_jet_swells_as_published():
     """The demo's Newtonian fluid through its 12 mm land (0.5 mm mesh): the jet leaves the land's
-    end and swells by 13.4 % (Nickell, Tanner and Caswell: 13 %; 12.8 % on the 0.25 mm mesh),
-    reached by updates that each take half their move (relaxation 0.5): 9, each move smaller
-    than the last (measured 0.11, 0.068, ..., 6.9e-4 of the exit radius; taken whole, the moves
-    swung between 0.004 and 0.011 over 7 updates)."""
+    end and swells by 12.6 % (Nickell, Tanner and Caswell: 13 %; 12.7 % on the 0.25 mm mesh) in
+    3 updates, each move about a tenth of the last (measured 0.107, 0.018, 0.0019, 2.5e-4 of the
+    exit radius)."""
     scene = load_scene(SWELL)
     _, _, summary, shape = _solve(scene)
     table = summary["free_surface"]
     moves = [row["surface_move"] for row in table["history"]]
-    assert table["converged"] and table["updates"] <= 10
-    assert np.all(np.diff(moves) < 0)
-    assert 0.125 < table["exit_diameter_change"] < 0.145
+    assert table["converged"] and table["updates"] <= 4
+    assert np.all(np.array(moves[1:]) < 0.3 * np.array(moves[:-1]))
+    assert 0.12 < table["exit_diameter_change"] < 0.135
     assert table["contact_end_x"] == pytest.approx(scene.geometry.profile().end[0])
     # the jet rises from the land's end and levels off: within 1e-3 of its radius over the
     # last 5 mm
@@ -106,7 +117,34 @@ def test_a_newtonian_jet_swells_as_published():
     assert surface[0, 1] == pytest.approx(6.0)
     level = surface[surface[:, 0] > scene.geometry.length - 5.0, 1]
     assert np.ptp(level) < 1e-3 * level[-1]
-    assert summary["force_balance_residual"] < 1e-2
+    assert summary["converged"] and summary["force_balance_residual"] < 1e-2
+
+
+def test_folded_cells_are_counted():
+    """The unit square's 2 x 2 quadrilaterals: none folded; with the middle node moved to
+    (1.2, 1.1), the three cells round it that it makes non-convex."""
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 2, 2,
+                                           dolfinx.mesh.CellType.quadrilateral)
+    assert folded_cells(mesh) == 0
+    x = mesh.geometry.x
+    x[np.isclose(x[:, 0], 0.5) & np.isclose(x[:, 1], 0.5), :2] = [1.2, 1.1]
+    assert folded_cells(mesh) == 3
+
+
+def test_an_update_onto_a_folded_mesh_is_not_taken(monkeypatch):
+    """The landless rod (one update, docs/free_surface.md) with its re-meshed workpiece reported
+    folded: the run keeps the scene's domain and its solve, and says why."""
+    from forming_fenicsx.app import free_surface
+
+    monkeypatch.setattr(free_surface, "folded_cells", lambda mesh: 2)
+    scene = _rod(0.0)
+    fixed = solve_scene(_rod(0.0, update=False))[2]
+    _, _, summary, shape = _solve(scene)
+    table = summary["free_surface"]
+    assert table["updates"] == 0 and not table["converged"]
+    assert table["exit_diameter_change"] == 0.0
+    assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=1e-12)
+    assert any("2 folded cells" in warning for warning in summary["warnings"])
 
 
 def test_a_domain_whose_surfaces_are_streamlines_is_kept():
@@ -149,7 +187,6 @@ def test_run_writes_the_free_surface(shared_tmp):
 @pytest.mark.parametrize("overrides, key", [
     (["free_surface.update=true", "free_surface.tolerance=0.5"], "free_surface.tolerance"),
     (["free_surface.update=true", "free_surface.max_updates=0"], "free_surface.max_updates"),
-    (["free_surface.update=true", "free_surface.relaxation=0"], "free_surface.relaxation"),
     (["free_surface.update=true", "accuracy.target=0.01"], "accuracy.target"),
 ])
 def test_free_surface_keys_are_checked(overrides, key):

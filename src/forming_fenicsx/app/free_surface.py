@@ -17,7 +17,8 @@ from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape, wall_area
 from forming_fenicsx.mesh.geometry import shaped_mesh
-from forming_fenicsx.post.free_surface import relaxed, shape_change, updated_shape
+from forming_fenicsx.mesh.quality import folded_cells
+from forming_fenicsx.post.free_surface import shape_change, updated_shape
 from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
@@ -40,10 +41,8 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     updates: list[dict[str, Any]] = []
     solves, moved, converged = summary["linear_solves"], 0, False
     while summary["iteration_converged"]:
-        traced = updated_shape(problem, shape, summary["contact_end_x"])
-        # the stop reads the whole move to the streamline; the next shape takes its share of it
-        move = shape_change(shape, traced, scene.geometry.length) / h1
-        new = relaxed(shape, traced, settings.relaxation)
+        new = updated_shape(problem, shape, summary["contact_end_x"])
+        move = shape_change(shape, new, scene.geometry.length) / h1
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],
@@ -55,10 +54,20 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         converged = move < settings.tolerance
         if converged or moved == settings.max_updates:
             break
+        last = problem, result, summary, shape
         shape, moved = new, moved + 1
         problem, result, summary = solve(problem.u, shaped_mesh(scene, shape)
                                          if comm.rank == 0 else None)
         solves += summary["linear_solves"]
+        folded = folded_cells(problem.mesh)
+        if folded:  # the last shape's solve stands: this mesh's cannot be trusted (quality.py)
+            problem, result, summary, shape = last
+            moved -= 1
+            summary["warnings"].append(
+                f"the free surface's update {moved + 1} re-meshed the workpiece with {folded} "
+                "folded cells (not convex): the update stopped, and the shape and the forces are "
+                f"those of update {moved}")
+            break
     summary["free_surface"] = {
         "converged": converged, "updates": moved, "tolerance": settings.tolerance,
         **shape_scalars(scene, shape), "history": updates, "linear_solves": solves,

@@ -428,13 +428,11 @@ class FreeSurface:
     ``update``, the flow solve alternates with a surface update that makes the free surfaces
     streamlines (v.n = 0) and moves where the contact with the die starts and ends, until the
     surface moves by less than ``tolerance`` times the exit half-size or ``max_updates`` updates
-    are made; each update moves the product's surface ``relaxation`` of the way to the streamline
-    (1: all of it). Off by default: the fixed domain the scene draws (the paper's model)."""
+    are made. Off by default: the fixed domain the scene draws (the paper's model)."""
 
     update: bool = False
     tolerance: float = 1e-3
     max_updates: int = 8
-    relaxation: float = 1.0
 
     def check(self) -> None:
         if not 0 < self.tolerance < 0.1:
@@ -443,7 +441,3 @@ class FreeSurface:
         if not 1 <= self.max_updates <= 50:
             raise SceneError("free_surface.max_updates",
                              f"must be an integer in [1, 50]; got {self.max_updates}")
-        if not 0 < self.relaxation <= 1:
-            raise SceneError("free_surface.relaxation",
-                             f"must lie in (0, 1] (the share of each update's move taken); got "
-                             f"{self.relaxation}")

@@ -1,9 +1,14 @@
 """The product's free surface made a streamline of the flow (v.n = 0), and where the contact ends.
 
-In 2D a free surface y(x) is a streamline: dy/dx = v_y/v_x (x along the axis, y the half-size or
-radius: the same in plane strain and axisymmetric). It is integrated by classical Runge-Kutta with
-STEPS_PER_CELL steps per element along x, the finite-element velocity evaluated at the stages
-(points.py; past the boundary, the nearest cell's polynomial extended).
+In 2D a free surface y(x) is a streamline (x along the axis, y the half-size or radius). Since the
+axis is one too, the flux between them is the same through every section: the surface is the
+level F(x, y) = int_0^y u_x w dy' = F(x0, y0) of the flux from the axis (w = y' axisymmetric, 1 in
+plane strain) through the point (x0, y0) where the contact ends (flux_surface). F is integrated
+across each of STEPS_PER_CELL sections per element along x, and the level found on it by Newton's
+method on Hermite's cubic (F and its derivative u_x w are known at the samples). The velocity is
+evaluated by points.py. The slope dy/dx = v_y/v_x is not integrated: at a sticking wall's
+corner, where the contact may end, the velocity vanishes and its direction is noise
+(docs/free_surface.md).
 
 The product's surface starts where the contact with the die ends: the last node of the die with
 positive contact pressure (a contact whose pressure would be tensile has released, and the
@@ -32,59 +37,98 @@ STEPS_PER_CELL = 4
 SNAP = 0.5
 
 
-def slope_field(u: dolfinx.fem.Function) -> Callable[[np.ndarray], np.ndarray]:
-    """dy/dx = v_y/v_x of a 2D velocity at points (N, 2): a column of slopes (collective)."""
-    values = PointValues([u])
-
-    def slope(xy: np.ndarray) -> np.ndarray:
-        v, _ = values.evaluate(np.atleast_2d(xy), outside="extend")
-        return v[:, 1] / v[:, 0]
-
-    return slope
-
-
-def streamline(slope: Callable[[np.ndarray], np.ndarray], start: tuple[float, float],
-               end_x: float, step: float, wall: DieProfile | None = None
-               ) -> tuple[np.ndarray, float | None]:
-    """The streamline from ``start`` to x = ``end_x`` (points (N, 2)) by RK4 steps of about
-    ``step`` in x; with ``wall``, a point past the die wall (within its x range) is put back onto
-    it (the surface slides along the die). Returns the points and the last x put on the wall
-    (None if none was)."""
+def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
+                 start: tuple[float, float], end_x: float, step: float, axisymmetric: bool,
+                 wall: DieProfile | None = None) -> tuple[np.ndarray, float | None]:
+    """The surface y(x) under which the flux of u equals the flux at ``start``'s section,
+    F(x, y) = int_0^y u_x w dy' = F(x0, y0) (w = y' axisymmetric, 1 in plane strain): the
+    streamline through the start for a divergence-free u, at stations about ``step`` apart in x to
+    x = ``end_x``. F is integrated by Simpson's rule at samples ``step`` apart (or closer) from
+    the axis to the current top boundary ``top(x)``, and beyond it with u_x held at its value
+    there. With ``wall``, a point past the die wall is put back onto it.
+    Returns the points (N, 2) and the last x put on the wall (None if none was). Collective."""
     count = max(1, math.ceil((end_x - start[0]) / step))
     xs = np.linspace(start[0], end_x, count + 1)
-    ys = np.empty(count + 1)
-    ys[0] = start[1]
+    heights = np.maximum(top(xs), start[1])
+    cells = max(2, 2 * math.ceil(np.max(heights) / step / 2))  # even: Simpson
+    fractions = np.linspace(0.0, 1.0, cells + 1)
+    ys = heights[:, None] * fractions[None, :]
+    points = np.column_stack([np.repeat(xs, cells + 1), ys.ravel()])
+    values, _ = PointValues([u]).evaluate(points, outside="extend")
+    along = values[:, 0].reshape(len(xs), cells + 1)
+    weight = ys if axisymmetric else np.ones_like(ys)
+    integrand = along * weight
+    # the flux from the axis to each even sample (Simpson), the odd ones by the trapezoid rule
+    spacing = (heights / cells)[:, None]
+    pairs = (integrand[:, :-2:2] + 4 * integrand[:, 1:-1:2] + integrand[:, 2::2]) / 3
+    cumulative = np.zeros_like(integrand)
+    cumulative[:, 2::2] = np.cumsum(pairs, axis=1) * spacing
+    cumulative[:, 1::2] = cumulative[:, :-1:2] + 0.5 * spacing * (integrand[:, :-1:2]
+                                                                  + integrand[:, 1::2])
+    first = _level(start[1], ys[0], cumulative[0], integrand[0])
+    found = np.empty(len(xs))
+    for i in range(len(xs)):
+        total = cumulative[i, -1]
+        if total >= first:
+            found[i] = _root(first, ys[i], cumulative[i], integrand[i])
+        else:  # beyond the top, u_x as at the top
+            rest = (first - total) / along[i, -1]
+            found[i] = (math.sqrt(heights[i] ** 2 + 2 * rest) if axisymmetric
+                        else heights[i] + rest)
+    found[0] = start[1]
     on_wall = None
+    if wall is not None:
+        for i in range(1, len(xs)):
+            if wall.start[0] <= xs[i] <= wall.end[0]:
+                limit = wall_height(wall, xs[i])
+                if found[i] > limit:
+                    found[i], on_wall = limit, xs[i]
+    return np.column_stack([xs, found]), on_wall
 
-    def f(x: float, y: float) -> float:
-        return float(slope(np.array([[x, y]]))[0])
 
-    for i in range(count):
-        x, y, h = xs[i], ys[i], xs[i + 1] - xs[i]
-        k1 = f(x, y)
-        k2 = f(x + 0.5 * h, y + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h, y + 0.5 * h * k2)
-        k4 = f(x + h, y + h * k3)
-        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        if wall is not None and wall.start[0] <= xs[i + 1] <= wall.end[0]:
-            limit = wall_height(wall, xs[i + 1])
-            if y > limit:
-                y, on_wall = limit, xs[i + 1]
-        ys[i + 1] = y
-    return np.column_stack([xs, ys]), on_wall
+def _hermite(t: float, h: float, f0: float, f1: float, d0: float, d1: float) -> tuple[float, float]:
+    """The cubic with values f0, f1 and slopes d0, d1 at the ends of an interval of length h, and
+    its slope, at the fraction t of it."""
+    h00, h10, h01, h11 = (2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2,
+                          t**3 - t**2)
+    value = h00 * f0 + h10 * h * d0 + h01 * f1 + h11 * h * d1
+    slope = ((6 * t**2 - 6 * t) * f0 + (3 * t**2 - 4 * t + 1) * h * d0
+             + (-6 * t**2 + 6 * t) * f1 + (3 * t**2 - 2 * t) * h * d1) / h
+    return value, slope
+
+
+def _level(y: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> float:
+    """F(y) from the samples of F and of its derivative f at ys (Hermite's cubic)."""
+    j = min(max(int(np.searchsorted(ys, y)) - 1, 0), len(ys) - 2)
+    h = ys[j + 1] - ys[j]
+    return _hermite((y - ys[j]) / h, h, flux[j], flux[j + 1], rate[j], rate[j + 1])[0]
+
+
+def _root(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> float:
+    """The y where F = level, F increasing, from the samples of F and of its derivative f at ys:
+    Newton's method on Hermite's cubic in the bracketing interval, from the linear guess."""
+    j = min(max(int(np.searchsorted(flux, level)) - 1, 0), len(ys) - 2)
+    h, low, high = ys[j + 1] - ys[j], flux[j], flux[j + 1]
+    t = (level - low) / (high - low) if high > low else 0.5
+    for _ in range(8):
+        value, slope = _hermite(t, h, low, high, rate[j], rate[j + 1])
+        if slope <= 0:
+            break
+        t = min(max(t - (value - level) / (slope * h), 0.0), 1.0)
+    return ys[j] + t * h
 
 
 def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
-    with the die ends (module docstring); ``shape``'s contact start is kept.
+    with the die ends (flux_surface) (module docstring); ``shape``'s contact start is kept.
     Collective (every rank returns the same shape)."""
     scene = problem.scene
     g = scene.geometry
     die = g.profile()
     size = scene.discretisation.mesh_size
     end = min(max(contact_end_x, shape.wall.start[0]), die.end[0])
-    line, last = streamline(slope_field(problem.u), (end, wall_height(die, end)), g.length,
-                            size / STEPS_PER_CELL, die)
+    line, last = flux_surface(problem.u, shape.height, (end, wall_height(die, end)), g.length,
+                              size / STEPS_PER_CELL, g.axisymmetric, die)
     if last is not None and last > end + size:  # the product would enter the die after an
         # element (within one, the penalty's own penetration): the contact goes on
         end = last
@@ -92,18 +136,6 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) 
     wall = clipped(die, shape.wall.start[0], end, SNAP * size)
     downstream = np.vstack([wall.end, line[line[:, 0] > wall.end[0] + 1e-9 * size]])
     return FreeShape(wall, downstream)
-
-
-def relaxed(old: FreeShape, new: FreeShape, relaxation: float) -> FreeShape:
-    """``new`` with its product surface moved only ``relaxation`` of the way from ``old``'s,
-    y = y_old + relaxation (y_new - y_old) at the new surface's x, from where its contact ends
-    (that point stays on the wall)."""
-    if relaxation == 1.0:
-        return new
-    downstream = new.downstream.copy()
-    x = downstream[1:, 0]
-    downstream[1:, 1] = old.height(x) + relaxation * (downstream[1:, 1] - old.height(x))
-    return FreeShape(new.wall, downstream)
 
 
 def shape_change(old: FreeShape, new: FreeShape, length: float, points: int = 2001) -> float:
