@@ -120,7 +120,7 @@ def _root(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> f
 
 def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
-    with the die ends (flux_surface) (module docstring); ``shape``'s contact start is kept.
+    with the die ends (flux_surface, module docstring); ``shape``'s contact start is kept.
     Collective (every rank returns the same shape)."""
     scene = problem.scene
     g = scene.geometry
