@@ -8,10 +8,10 @@ beyond the wall it follows) takes the cell nearest to it, on the rank whose cell
 its polynomial extended beyond the cell (``outside="extend"``), or the point moved onto that
 cell's boundary (``outside="onto_cell"``: the nearest point of the polygon through its boundary
 nodes, the cell's edges where they are straight). A quadrilateral's map to its reference cell is
-not affine and cannot be inverted far outside it (dolfinx's pull-back stops: "Newton method failed
-to converge for non-affine geometry"); such a point is moved onto the cell as for "onto_cell",
-and where even that fails (a distorted cell) it takes the cell's nearest node (a swelling
-extrudate's streamline, traced above the last mesh's surface, met both).
+not affine and may not be inverted far outside it (dolfinx 0.5's pull-back stops: "Newton method
+failed to converge for non-affine geometry"); such a point is moved onto the cell as for
+"onto_cell", and where even that fails (a distorted cell) it takes the cell's nearest node (a
+swelling extrudate's streamline, traced above the last mesh's surface, met both).
 """
 from __future__ import annotations
 
