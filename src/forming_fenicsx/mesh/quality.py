@@ -20,7 +20,7 @@ def folded_cells(mesh) -> int:
     owned = mesh.topology.index_map(mesh.topology.dim).size_local
     corners = mesh.geometry.x[nodes[:owned][:, CORNERS[nodes.shape[1]]], :2]
     edges = np.roll(corners, -1, axis=1) - corners
-    turns = edges[:, :, 0] * np.roll(edges, -1, axis=1)[:, :, 1] \
-        - edges[:, :, 1] * np.roll(edges, -1, axis=1)[:, :, 0]
+    following = np.roll(edges, -1, axis=1)
+    turns = edges[:, :, 0] * following[:, :, 1] - edges[:, :, 1] * following[:, :, 0]
     one_way = np.all(turns > 0, axis=1) | np.all(turns < 0, axis=1)
     return int(mesh.comm.allreduce(int(np.count_nonzero(~one_way)), op=MPI.SUM))
