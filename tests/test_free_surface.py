@@ -141,7 +141,8 @@ def test_folded_cells_are_counted():
 
 def test_an_update_onto_a_folded_mesh_is_not_taken(monkeypatch):
     """The landless rod (one update, docs/free_surface.md) with its re-meshed workpiece reported
-    folded: the run keeps the scene's domain and its solve, and says why."""
+    folded: the run keeps the scene's domain and its solve, and says why (two solves of one
+    scene differed by 4.6e-12 on 2 ranks in CI; the update moves the ram pressure by 7e-4)."""
     from forming_fenicsx.app import free_surface
 
     monkeypatch.setattr(free_surface, "folded_cells", lambda mesh: 2)
@@ -151,7 +152,7 @@ def test_an_update_onto_a_folded_mesh_is_not_taken(monkeypatch):
     table = summary["free_surface"]
     assert table["updates"] == 0 and not table["converged"]
     assert table["exit_diameter_change"] == 0.0
-    assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=1e-12)
+    assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=1e-9)
     assert any("2 folded cells" in warning for warning in summary["warnings"])
 
 
