@@ -25,6 +25,16 @@ def divergence_l2(problem: FlowProblem) -> float:
     return float(np.sqrt(integrate(problem, problem.divergence(problem.u) ** 2 * problem.dx_vol)))
 
 
+def volume_change(problem: FlowProblem) -> float:
+    """int div u dx / Q, Q the throughput: the volume the flow gains between its way in and its way
+    out (the net flux through the whole boundary, by the divergence theorem) per unit throughput.
+    The penalty (3.5) makes it d int sigma_H dx / Q, O(d) (Theorem 3.1); the mixed formulation's
+    piecewise-linear pressure holds each cell's int div u at zero up to the solve."""
+    through = throughput(problem)
+    gained = integrate(problem, problem.divergence(problem.u) * problem.dx)
+    return gained / through if through else math.nan
+
+
 def relative_divergence(problem: FlowProblem, divergence: float) -> float:
     """||div u|| / ||e(u)|| (L2 norms over the strip), given ||div u||: the volume change the
     penalty 1/d leaves, per unit of deformation rate; Theorem 3.1 drives it to zero like O(d)."""

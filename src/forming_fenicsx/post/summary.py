@@ -8,7 +8,7 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergence,
                                               dissipation_outside_window, divergence_l2,
                                               exit_zone_rate_ratio, free_surface_crossing,
-                                              relative_divergence)
+                                              relative_divergence, volume_change)
 from forming_fenicsx.post.die import (die_contact_fraction, die_profile, die_scalars,
                                       die_scalars_3d, die_scalars_of)
 from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
@@ -76,6 +76,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "divergence_l2": divergence,
         "relative_divergence": relative_divergence(problem, divergence),
         **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
+        "volume_change": volume_change(problem),
         "free_surface_crossing": free_surface_crossing(problem),
         "die_penetration": die_penetration(problem),
         **({} if "die_contact_fraction" in process else
