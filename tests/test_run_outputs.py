@@ -180,8 +180,9 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
         env.update(XDG_CACHE_HOME=str(shared_tmp / "cold-cache"), OMPI_ALLOW_RUN_AS_ROOT="1",
                    OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
         done = subprocess.run([sys.executable, "-m", "forming_fenicsx.app.cli", "run", DEMO,
-                               "--out", str(out), *COARSE,
-                               "--set", "output.fields=false", "--set", "output.figures=false"],
+                               "--out", str(out), *COARSE, "--set", "output.fields=false",
+                               # the paper's d = 1e-3 loses 2.9 % of the volume here, and warns
+                               "--set", "output.figures=false", "--set", "penalty.d=1e-4"],
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
         # the forms were compiled, not taken from a cache

@@ -9,7 +9,7 @@ from forming_fenicsx.config.loader import scene_from_dict
 NORMAL = {"die_penetration": 2e-5, "relative_divergence": 3e-3, "exit_zone_rate_ratio": 1.5e-5,
           "drawing_stress": 70.0, "free_surface_crossing": 0.019, "die_contact_fraction": 0.8,
           "dissipation_above_rate2": 0.037, "dissipation_below_rate1": 0.01,
-          "solve_error_estimate": 1e-9,
+          "solve_error_estimate": 1e-9, "volume_change": -1.8e-4,
           # the drawing stress over the strip's 2k, about 201
           "product_yield_ratio": 70.0 / 201.0, "force_balance_residual": 2e-5}
 SCENE = scene_from_dict({"process": {"kind": "drawing"}})
@@ -26,6 +26,8 @@ def test_a_normal_run_passes_every_check():
 @pytest.mark.parametrize("key, warn, fail, check, phrase", [
     ("die_penetration", 0.02, 0.083, "die_penetration", "smaller solver.tolerance"),
     ("relative_divergence", 0.2, 0.6, "compressibility", "the material compresses"),
+    # the paper's Example 1 (d = 1e-3, h = 0.125) loses 2.2 % of its volume
+    ("volume_change", -0.022, -0.06, "compressibility", "formulation = \"mixed\""),
     ("product_yield_ratio", 0.95, 1.05, "drawability", "not drawable"),
     ("free_surface_crossing", 0.08, 0.98, "free_surface_crossing",
      "refine discretisation.mesh_size"),
