@@ -127,6 +127,9 @@ def test_named_material_cited_and_overridden():
     assert scene_from_dict(data).material.K == 400.0
     with pytest.raises(SceneError, match="quadrature"):
         scene_from_dict({**data, "discretisation": {"averaging": "nodes"}})
+    # the hardening law reads the strain at the integration points: their averaging by default
+    named = scene_from_dict({**data, "discretisation": {}})
+    assert named.discretisation.averaging == "quadrature"
 
 
 def test_sellars_tegart_law():

@@ -342,7 +342,8 @@ def test_newton_history_and_scene_check(shared_tmp):
                for r in newton_rows[1:])
     assert float(newton_rows[-1]["relative_increment"]) < 1e-4
     with pytest.raises(SceneError, match="averaging"):
-        make_scene(solver={"method": "newton"})
+        make_scene(solver={"method": "newton"}, discretisation={"averaging": "nodes"})
+    assert make_scene(solver={"method": "newton"}).discretisation.averaging == "quadrature"
 
 
 @pytest.mark.parametrize("sections", [
