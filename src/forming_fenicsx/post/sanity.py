@@ -131,10 +131,10 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
         return None
     failed = value > COMPRESSIBLE[1] or change > VOLUME_CHANGE[1]
     return Finding("compressibility",
-                   f"the material compresses: ||div u||/||e(u)|| = {value:.2g}, and the volume "
-                   f"changes by {100 * change:.3g} % of the throughput between the way in and the "
-                   f"way out; the results are those of a compressible material. Cause: "
-                   f"{'; '.join(causes)}", failure=failed)
+                   f"the material compresses: the outflow differs from the inflow by "
+                   f"{100 * change:.3g} % of the throughput (volume_change) and ||div u||/||e(u)|| "
+                   f"= {value:.2g}; the velocities and volumes are those of a compressible "
+                   f"material. Cause: {'; '.join(causes)}", failure=failed)
 
 
 def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
