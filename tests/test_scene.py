@@ -104,6 +104,8 @@ BAD = [
      "material.m", "(0, 1]"),
     ({"material": {"law": "swift", "K": 100.0, "n": 0.2, "prestrain": 0.01, "C": 0.1}},
      "material.C", "does not apply"),
+    # a key of the other die (a new user's wedge extrusion without geometry.die)
+    ({"geometry": {"die_angle": 45.0}}, "geometry.die_angle", "set geometry.die = 'conical'"),
     ({"discretisation": {"element": "Q3"}}, "discretisation.element", "Q1, Q2"),
     ({"discretisation": {"mesh_size": 3.0}}, "discretisation.mesh_size", "thinnest"),
     ({"discretisation": {"corner_grading": 0.5}}, "discretisation.corner_grading", "[1, 1000]"),

@@ -2,6 +2,7 @@
 :class:`Scene` built from the parsed document (loaded, resolved, checked before any meshing)."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from pathlib import Path
@@ -53,6 +54,14 @@ def geometry_class(kind: str, table: dict[str, Any]) -> type:
     if not isinstance(die, str) or die not in dies:
         raise SceneError("geometry.die",
                          f"must be one of {', '.join(dies)} for {kind}; got {die!r}")
+    known = {field.name for field in dataclasses.fields(dies[die])}
+    for key in table:
+        other = next((name for name, cls in dies.items() if name != die
+                      and key in {field.name for field in dataclasses.fields(cls)}), None)
+        if key not in known and other is not None:  # e.g. a die angle for the square die
+            given = "" if "die" in table else f" ({kind}'s default)"
+            raise SceneError(f"geometry.{key}", f"belongs to geometry.die = {other!r}; this "
+                             f"scene's die is {die!r}{given}: set geometry.die = {other!r}")
     return dies[die]
 
 
