@@ -79,6 +79,7 @@ BAD = [
     ({"geometry": {"die_position": 25.0, "length": 20.0}}, "geometry.die_position",
      "geometry.length"),
     ({"friction": {"mu": -0.1}}, "friction.mu", ">= 0"),
+    ({"friction": {"m": 0.5}}, "friction.m", 'set friction.law = "factor"'),
     ({"friction": {"d_T": 0.0}}, "friction.d_T", "> 0"),
     ({"penalty": {"d": 0.0}}, "penalty.d", "> 0"),
     ({"penalty": {"d_N": -1e-6}}, "penalty.d_N", "> 0"),

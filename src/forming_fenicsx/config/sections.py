@@ -134,9 +134,10 @@ class Friction:
                              f"must lie in [0, 1] (the friction factor); got {self.m}")
         unused = {"coulomb": ("m", self.m), "factor": ("mu", self.mu)}[self.law]
         if unused[1] != 0:
-            coefficient = "mu" if self.law == "coulomb" else "m"
+            coefficient, other = ("mu", "factor") if self.law == "coulomb" else ("m", "coulomb")
             raise SceneError(f"friction.{unused[0]}", f'does not apply to friction.law = '
-                             f'"{self.law}" ({coefficient} is its coefficient); leave it out')
+                             f'"{self.law}" ({coefficient} is its coefficient): leave it out, or '
+                             f'set friction.law = "{other}", whose coefficient it is')
         check_positive("friction.d_T", self.d_T)
         if self.normal_stress not in NORMAL_STRESSES:
             raise SceneError("friction.normal_stress",
