@@ -269,11 +269,14 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
             surface = summary["free_surface"]
             size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key
             log.info("free surface: %s after %d updates, the product's %s %.6g (%+.3g %% from the "
-                     "die's), contact from x = %.5g to %.5g, crossing %.3g %%, %d linear solves, "
-                     "%.1f s", "settled" if surface["converged"] else "not settled",
+                     "die's), contact from x = %.5g to %.5g, crossing %.3g %% (product %.3g %%, "
+                     "stock %.3g %%: not updated), %d linear solves, %.1f s",
+                     "settled" if surface["converged"] else "not settled",
                      surface["updates"], size.replace("_", " "), surface[size],
                      100 * surface[f"{size}_change"], surface["contact_start_x"],
                      surface["contact_end_x"], 100 * summary["free_surface_crossing"],
+                     100 * summary["free_surface_crossing_product"],
+                     100 * summary["free_surface_crossing_stock"],
                      surface["linear_solves"], surface["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]

@@ -58,19 +58,24 @@ def discrete_divergence(problem: FlowProblem) -> float:
     return value
 
 
-def free_surface_crossing(problem: FlowProblem) -> float:
-    """Volume crossing the free surfaces (Gamma2, Gamma4 facets whose normal is mostly across the
-    flow: its y (and z) part over 0.5), in or out, relative to the flux through Gamma1: zero for a
-    steady state whose free surfaces are streamlines, so it measures what the fixed-domain model
-    (2.6) lets cross them."""
+CROSSED_SURFACES = {"stock": "gamma2_free", "product": "gamma4_free"}
+
+
+def free_surface_crossings(problem: FlowProblem) -> dict[str, float]:
+    """Volume crossing each free surface, in or out, relative to the flux through Gamma1: the
+    stock's (Gamma2, upstream) and the product's (Gamma4), facets whose normal is mostly across
+    the flow (its y (and z) part over 0.5); zero for a steady state whose free surfaces are
+    streamlines, so they measure what the fixed-domain model (2.6) lets cross them."""
     n = problem.n
     across = abs(n[1]) if problem.mesh.geometry.dim == 2 else ufl.sqrt(n[1] ** 2 + n[2] ** 2)
     surface = ufl.conditional(ufl.gt(across, 0.5), 1.0, 0.0)
-    out = sum(integrate(problem, abs(ufl.dot(problem.u, problem.n)) * surface
-                        * problem.ds(ROLES[role]))
-              for role in ("gamma2_free", "gamma4_free") if role in problem.roles)
     through = throughput(problem)
-    return out / through if through else math.nan
+    crossed = {}
+    for name, role in CROSSED_SURFACES.items():
+        out = (integrate(problem, abs(ufl.dot(problem.u, n)) * surface * problem.ds(ROLES[role]))
+               if role in problem.roles else 0.0)
+        crossed[name] = out / through if through else math.nan
+    return crossed
 
 
 def die_penetration(problem: FlowProblem) -> float:

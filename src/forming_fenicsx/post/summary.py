@@ -7,7 +7,7 @@ from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergence,
                                               dissipation_outside_window, divergence_l2,
-                                              exit_zone_rate_ratio, free_surface_crossing,
+                                              exit_zone_rate_ratio, free_surface_crossings,
                                               relative_divergence, volume_change)
 from forming_fenicsx.post.die import (die_contact_fraction, die_profile, die_scalars,
                                       die_scalars_3d, die_scalars_of)
@@ -28,6 +28,12 @@ def exit_section(problem: FlowProblem) -> float:
     if c.three_dimensional:
         return integrate(problem, 1.0 * problem.ds(ROLES["gamma1_velocity"]))
     return c.section(product_half_size(problem))
+
+
+def crossing_keys(crossed: dict[str, float]) -> dict[str, float]:
+    """free_surface_crossing (both free surfaces) and its part on each, by name."""
+    return {"free_surface_crossing": sum(crossed.values()),
+            **{f"free_surface_crossing_{name}": value for name, value in crossed.items()}}
 
 
 def scalars(problem: FlowProblem) -> dict[str, float]:
@@ -77,7 +83,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "relative_divergence": relative_divergence(problem, divergence),
         **({"discrete_divergence": discrete_divergence(problem)} if problem.mixed else {}),
         "volume_change": volume_change(problem),
-        "free_surface_crossing": free_surface_crossing(problem),
+        **crossing_keys(free_surface_crossings(problem)),
         "die_penetration": die_penetration(problem),
         **({} if "die_contact_fraction" in process else
            {"die_contact_fraction": die_contact_fraction(problem)}),
