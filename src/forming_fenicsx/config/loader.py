@@ -54,11 +54,10 @@ def geometry_class(kind: str, table: dict[str, Any]) -> type:
     if not isinstance(die, str) or die not in dies:
         raise SceneError("geometry.die",
                          f"must be one of {', '.join(dies)} for {kind}; got {die!r}")
-    known = {field.name for field in dataclasses.fields(dies[die])}
+    keys = {name: {field.name for field in dataclasses.fields(cls)} for name, cls in dies.items()}
     for key in table:
-        other = next((name for name, cls in dies.items() if name != die
-                      and key in {field.name for field in dataclasses.fields(cls)}), None)
-        if key not in known and other is not None:  # e.g. a die angle for the square die
+        other = next((name for name in dies if key in keys[name] - keys[die]), None)
+        if other is not None:  # e.g. a die angle for the square die
             given = "" if "die" in table else f" ({kind}'s default)"
             raise SceneError(f"geometry.{key}", f"belongs to geometry.die = {other!r}; this "
                              f"scene's die is {die!r}{given}: set geometry.die = {other!r}")
@@ -102,13 +101,12 @@ def scene_from_dict(data: dict[str, Any]) -> Scene:
                     raise SceneError(f"thermal.{key}", f"{kind} has no container; leave it out")
         built["thermal"] = build_section(Thermal, tables["thermal"], "thermal")
     material = build_material(tables["material"], defaults.get("material", {}), tables["units"])
-    coupled = material.hardens or (material.heats and "thermal" in built)
-    if "method" not in tables["solver"] and coupled:
-        built["solver"].method = "newton"  # docs/hardening.md: 11 to 15 solves against 18 to 933
-    if "averaging" not in tables["discretisation"] and (
-            built["solver"].method == "newton" or coupled):
-        built["discretisation"].averaging = "quadrature"
     scene = Scene(process=process, material=material, **built)
+    if "method" not in tables["solver"] and scene.coupled:
+        scene.solver.method = "newton"  # docs/hardening.md: 11 to 15 solves against 18 to 933
+    if "averaging" not in tables["discretisation"] and (
+            scene.solver.method == "newton" or scene.coupled):
+        scene.discretisation.averaging = "quadrature"
     scene.resolve()
     scene.check()
     return scene

@@ -134,8 +134,7 @@ class Scene:
             raise SceneError("thermal", 'heat transfer is not available with symmetry = "3d" yet '
                              "(a 3D run solves the flow and the strain); leave [thermal] out or "
                              "model the product in 2D")
-        coupled = self.material.hardens or (self.material.heats and self.thermal is not None)
-        if coupled and self.discretisation.averaging != "quadrature":
+        if self.coupled and self.discretisation.averaging != "quadrature":
             raise SceneError("discretisation.averaging", f"material.law = {self.material.law!r} "
                              'reads the strain or temperature at the integration points: it needs '
                              f'"quadrature"; got {self.discretisation.averaging!r}')
@@ -204,6 +203,12 @@ class Scene:
         if self.accuracy.target is not None:
             raise SceneError("accuracy.target", "accuracy on demand and the free-surface update "
                              "are not combined yet: give one or the other")
+
+    @property
+    def coupled(self) -> bool:
+        """Whether the flow law reads a transported field at the integration points: the strain
+        of a hardening law, or the [thermal] temperature of a law that heats."""
+        return self.material.hardens or (self.material.heats and self.thermal is not None)
 
     @property
     def reference_strain_rate(self) -> float:

@@ -109,7 +109,7 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
     if scene.discretisation.formulation != "penalty":
         return None
     value, penalty = summary["relative_divergence"], scene.penalty
-    change = abs(summary.get("volume_change", 0.0))
+    change = abs(summary["volume_change"])
     causes = []
     if any(f.check == "die_penetration" for f in found):
         causes.append("the die lets the workpiece through (above), so it is squeezed instead of "
