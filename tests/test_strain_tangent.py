@@ -51,7 +51,8 @@ def test_reduced_jacobian_is_the_coupled_derivative():
     tangent = newton.coupled_tangent
     tangent.assemble()
     coupled, plain = direction.duplicate(), direction.duplicate()
-    tangent.mult(direction, coupled)
+    newton.tangent.corrections = [tangent]
+    newton.tangent.mult(direction, coupled)
     newton.newton.A.mult(direction, plain)
     share = coupled.copy()
     share.axpy(-1.0, plain)

@@ -23,7 +23,7 @@ class BoundaryFilter:
                  facet_tags: dolfinx.mesh.MeshTags, contact_tag: int, length: float, name: str,
                  prefix: str):
         """``prefix``: the name of its PETSc options (petsc_options.py), MUMPS LU by default."""
-        space = function_space(mesh, "P", 1)
+        self.space = space = function_space(mesh, "P", 1)
         self.value = dolfinx.fem.Function(space, name=name)
         p, q = ufl.TrialFunction(space), ufl.TestFunction(space)
         n = ufl.FacetNormal(mesh)
@@ -43,7 +43,9 @@ class BoundaryFilter:
         local = space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
         others = np.setdiff1d(np.arange(local, dtype=np.int32), contact_dofs)
         bcs = [dolfinx.fem.dirichletbc(PETSc.ScalarType(0.0), others, space)]
-        self._problem = LinearProblem(dolfinx.fem.form(a), [dolfinx.fem.form(source * q * ds)],
+        # (f, q) on Gamma3 (friction_tangent.py differentiates it)
+        self.source_form = source * q * ds
+        self._problem = LinearProblem(dolfinx.fem.form(a), [dolfinx.fem.form(self.source_form)],
                                       self.value, bcs, prefix=prefix, options=DIRECT)
         # all read by setFromOptions (a user's own, on the command line, stay)
         self._problem.release_options()
@@ -52,3 +54,7 @@ class BoundaryFilter:
     def update(self) -> dolfinx.fem.Function:
         """Recompute the field from the current values of the source's coefficients."""
         return self._problem.solve(matrix=False)
+
+    def solve_vector(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        """x = M^-1 b with the filter's factors (b zero off Gamma3)."""
+        self._problem.solve_system(x, b)

@@ -33,8 +33,10 @@ from forming_fenicsx.core.compat import petsc_vec, set_at_quadrature_points
 from forming_fenicsx.core.errors import LinearSolveError
 from forming_fenicsx.coupled.strain_tangent import StrainTangent
 from forming_fenicsx.fem.forms import FlowProblem
+from forming_fenicsx.fem.friction_tangent import FrictionTangent
 from forming_fenicsx.fem.linear_problem import Timings
 from forming_fenicsx.fem.newton_forms import newton_forms
+from forming_fenicsx.fem.tangent_gmres import TangentGMRES
 from forming_fenicsx.solvers import messages
 from forming_fenicsx.solvers.line_search import (ARMIJO, MAX_HALVINGS, REFINEMENTS, next_trial,
                                                  parabola_step)
@@ -84,19 +86,35 @@ class NewtonSolver(SecantSolver):
         # G' = 0 at the owned Gauss points, and the die nodes in contact, at the last operator
         self._branches: np.ndarray | None = None
         self._active: np.ndarray | None = None
-        # a coupled field's derivative in the step once the coupling has settled (the
-        # transported strain's, strain_tangent.py)
-        # (not with the iterative solver: each GMRES iteration would be a whole Krylov solve; the
-        # coupling is then staggered, as before it settles)
+        # the frozen coefficients' derivatives in the step (tangent_gmres.py): a coupled field's
+        # once the coupling has settled (the transported strain's, strain_tangent.py), and in
+        # rolling, whose strip friction alone holds along x, Coulomb's friction bound's after the
+        # first full step (friction_tangent.py; docs/rolling.md: in drawing and extrusion its
+        # share of the step is a few per cent and the lengthened steps it forgoes matter more,
+        # Example 1 at mu = 0.1 took 17 solves instead of 14; the factor law's m k stays frozen:
+        # at m = 1 its derivative took a sticking roll gap from 35 solves to a divergence); not
+        # with the iterative solver, where each GMRES iteration would be a whole Krylov solve (the
+        # coupling is then staggered, as before it settles, and the bound frozen at each step)
         carried = [field for field in problem.frozen if field.tangent]
-        self.coupled_tangent = StrainTangent(
-            problem, carried[0], self.forms.residual.ufl, self.newton.A, self.newton.ksp) \
-            if carried and self.linear.saddle_point is None else None
+        direct = self.linear.saddle_point is None
+        self.coupled_tangent = StrainTangent(problem, carried[0], self.forms.residual.ufl) \
+            if carried and direct else None
+        self.friction_tangent = None
+        if problem.rolling and problem.has_friction and problem.scene.friction.law == "coulomb" \
+                and direct:
+            self.friction_tangent = FrictionTangent(problem, self.forms.residual.ufl)
+            if not self.friction_tangent.terms:  # a bound the step does not move
+                self.friction_tangent.destroy()
+                self.friction_tangent = None
+        self.tangent = TangentGMRES(self.newton.A, self.newton.ksp) \
+            if self.coupled_tangent or self.friction_tangent else None
+        self._friction_in_tangent = False
 
     def destroy(self) -> None:
         self.newton.destroy()
-        if self.coupled_tangent is not None:
-            self.coupled_tangent.destroy()
+        for item in (self.coupled_tangent, self.friction_tangent, self.tangent):
+            if item is not None:
+                item.destroy()
         self._change.destroy()
         if self._contact_set is not None:
             self._contact_set.destroy()
@@ -179,13 +197,14 @@ class NewtonSolver(SecantSolver):
         self._estimate = lambda: self.newton.error_estimate() * du.norm() / max(u.norm(), 1e-300)
         solve_error = self.sampled_error(result)
         coupled = ""
-        if self._coupled_in_tangent():
+        corrections = self._corrections()
+        if corrections:
             error = self._estimate()  # of A's solve, before du moves
             self._estimate = lambda: error
-            converged = self.coupled_tangent.solve(self.newton.b, du)
-            coupled = (f"  {self.coupled_tangent.field.name} in the tangent: "
-                       f"{self.coupled_tangent.iterations} GMRES iterations") \
-                + ("" if converged else " (not converged: the staggered step)")
+            converged = self.tangent.solve(self.newton.b, du, corrections)
+            coupled = (f"  {', '.join(c.name for c in corrections)} in the tangent: "
+                       f"{self.tangent.iterations} GMRES iterations") \
+                + ("" if converged else " (not converged: the frozen step)")
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms.step.x.scatter_forward()
@@ -205,6 +224,10 @@ class NewtonSolver(SecantSolver):
                                  self.newton.velocity_iterations - inner_before)
         self.newton.follow(increment)
         result.history.append(record)
+        # the friction bound's derivative joins the steps after the first taken in full: from the
+        # first step on, R/h1 = 100, 40 %, mu = 0.3 diverged (docs/rolling.md)
+        if self.friction_tangent is not None and step >= 1.0:
+            self._friction_in_tangent = True
         if problem.comm.rank == 0:
             log.info("newton %3d  ||du||/||u|| = %.3e  ||F|| = %.3e  step %.3g  switched: law %d, "
                      "contact %d  (%.1f s)%s", inner, increment, residual, step, law_switches,
@@ -248,7 +271,7 @@ class NewtonSolver(SecantSolver):
             return step  # no sufficient decrease down to 2**-12: the stall checks end such runs
         if step < 1.0:
             return self._lowest(energies, self._refine(energies, step))
-        if self._relative_change() < self.settings.tolerance or self._coupled_in_tangent():
+        if self._relative_change() < self.settings.tolerance or self._corrections():
             return step
         step = 2.0
         energies[step] = self._energy_at(step)
@@ -268,6 +291,13 @@ class NewtonSolver(SecantSolver):
         if scene_tolerance > 0 or not (self._coupled_in_tangent() or three_d):
             return scene_tolerance
         return COUPLED_BALANCE
+
+    def _corrections(self) -> list:
+        """The frozen coefficients' derivatives the step carries (tangent_gmres.py)."""
+        active = [self.coupled_tangent] if self._coupled_in_tangent() else []
+        if self._friction_in_tangent:
+            active.append(self.friction_tangent)
+        return active
 
     def _coupled_in_tangent(self) -> bool:
         """Whether the step carries the strain's derivative (strain_tangent.py): it is then not
@@ -341,6 +371,7 @@ class NewtonSolver(SecantSolver):
         self.forms.dual.x.array[:] *= settings.dual_start
         self.keep_previous()  # the first operator's previous iterate: its contact set is u's
         self._branches = self._active = None  # count_switches starts afresh
+        self._friction_in_tangent = False
         increments = []
         for inner in range(1, settings.max_iterations + 1):
             increment = self._newton_step(result, inner, start)
