@@ -94,7 +94,9 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
     assert table["contact_end_x"] == pytest.approx(scene.geometry.die_exit)
     assert shape.downstream[0] == pytest.approx(scene.geometry.profile().end)
     # the product narrows within an element of the corner, then runs level (to 4e-7 of 6 mm)
-    assert np.all(np.diff(shape.downstream[:, 1]) <= 1e-6)
+    after = shape.downstream[shape.downstream[:, 0] > shape.downstream[0, 0] + 0.6]
+    assert np.all(np.diff(after[:, 1]) <= 1e-6)
+    assert shape.downstream[:, 1].min() > shape.exit_height - 0.01
     # the drawing stress's section and the product's profile read the product's own size
     assert 2 * shape.exit_height == pytest.approx(table["exit_diameter"])
 
@@ -225,19 +227,43 @@ def test_free_surface_keys_are_checked(overrides, key):
     assert error.value.key == key
 
 
-def test_the_square_die_is_refused_by_name():
-    with pytest.raises(SceneError) as error:
-        load_scene(DEMOS / "example1_extrusion.toml", ["free_surface.update=true"])
-    assert error.value.key == "geometry.die"
+def test_the_update_is_off_unless_asked():
     assert math.isfinite(load_scene(EXAMPLE2).free_surface.tolerance)
     assert not load_scene(EXAMPLE2).free_surface.update
+    assert not load_scene(DEMOS / "example1_extrusion.toml").free_surface.update
+
+
+def test_the_square_dies_product_leaves_its_corner_as_a_streamline():
+    """Example 1 (the square die, mu = 0.1, the volumetric penalty 1e-4, Newton; h = 0.25): the
+    product's surface starts at the die corner (10, 2.5) and two updates settle it. Measured: the
+    product 0.53 % under the die's 5, level beyond the first element, the crossing from 0.55 % to
+    0.11 %, the ram pressure 0.29 % lower than on the scene's domain (docs/free_surface.md)."""
+    overrides = ["friction.mu=0.1", "penalty.d=1e-4", "solver.method=newton",
+                 "discretisation.averaging=quadrature", "discretisation.mesh_size=0.25"]
+    fixed = solve_scene(load_scene(DEMOS / "example1_extrusion.toml", overrides))[2]
+    scene = load_scene(DEMOS / "example1_extrusion.toml", overrides + ["free_surface.update=true"])
+    _, _, summary, shape = _solve(scene)
+    table, g = summary["free_surface"], scene.geometry
+    assert table["converged"] and table["updates"] <= 2
+    assert shape.wall is None and shape.downstream[0] == pytest.approx((10.0, 2.5))
+    assert table["contact_start_x"] == table["contact_end_x"] == g.die_position
+    assert -0.01 < table["exit_thickness_change"] < -0.002
+    beyond = shape.downstream[shape.downstream[:, 0] > g.die_position + 0.5]
+    assert np.ptp(beyond[:, 1]) < 1e-4 * shape.exit_height
+    assert summary["free_surface_crossing"] < 0.4 * fixed["free_surface_crossing"]
+    assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=5e-3)
+    assert summary["ram_pressure"] < fixed["ram_pressure"]
 
 
 def test_the_crossing_warning_names_the_update_where_it_applies():
-    """A crossing above 5 % of the throughput warns; on a profiled 2D die without the update the
-    message says that free_surface.update moves the product's surface, on the square die not."""
+    """A crossing above 5 % of the throughput warns; on a 2D die without the update the message
+    says that free_surface.update moves the product's surface (the square die's too), on the
+    rolled strip, whose rolls the update does not follow, not."""
     drawing = free_surfaces({"free_surface_crossing": 0.08}, load_scene(EXAMPLE2))
     square = free_surfaces({"free_surface_crossing": 0.08},
                            load_scene(DEMOS / "example1_extrusion.toml"))
+    rolled = free_surfaces({"free_surface_crossing": 0.08},
+                           load_scene(DEMOS / "strip_rolling.toml"))
     assert "free_surface.update = true" in drawing.message and not drawing.failure
-    assert "free_surface.update" not in square.message
+    assert "free_surface.update = true" in square.message
+    assert "free_surface.update" not in rolled.message

@@ -41,7 +41,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     updates: list[dict[str, Any]] = []
     solves, moved, converged = summary["linear_solves"], 0, False
     while summary["iteration_converged"]:
-        new = updated_shape(problem, shape, summary["contact_end_x"])
+        new = updated_shape(problem, shape, summary.get("contact_end_x"))  # none: square
         move = shape_change(shape, new, scene.geometry.length) / h1
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
@@ -78,9 +78,10 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             f"{settings.max_updates} updates (the last moved it {updates[-1]['surface_move']:.3g} "
             f"of the exit half-size, tolerance {settings.tolerance:g}): the shape and the "
             "forces are those of the last update")
-    summary["die_contact_fraction"] *= (wall_area(shape.wall, scene.geometry.axisymmetric)
-                                        / wall_area(scene.geometry.profile(),
-                                                    scene.geometry.axisymmetric))
+    if shape.wall is not None:  # the square die's face stays whole
+        summary["die_contact_fraction"] *= (wall_area(shape.wall, scene.geometry.axisymmetric)
+                                            / wall_area(scene.geometry.profile(),
+                                                        scene.geometry.axisymmetric))
     return problem, result, summary, shape
 
 
@@ -89,9 +90,12 @@ def shape_scalars(scene: Scene, shape: FreeShape) -> dict[str, float]:
     size, and where the contact with the die starts and ends."""
     g = scene.geometry
     size = f"exit_{g.thickness_name}"
+    # the square die: its face at x = die_position, the product leaving it at the corner
+    start, end = ((g.die_position, g.die_position) if shape.wall is None
+                  else (shape.wall.start[0], shape.wall.end[0]))
     return {size: 2 * shape.exit_height,
             f"{size}_change": shape.exit_height / (0.5 * g.exit_thickness) - 1,
-            "contact_start_x": shape.wall.start[0], "contact_end_x": shape.wall.end[0]}
+            "contact_start_x": start, "contact_end_x": end}
 
 
 def surface_lines(shape: FreeShape) -> dict[str, np.ndarray]:

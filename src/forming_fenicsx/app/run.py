@@ -211,9 +211,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         if comm.rank == 0:
             write_die_faces(faces, list(stresses), out / "die.png", heading, scene)
             write_maps_3d(planes, profile, out, heading, scene.units)
-    elif scene.output.figures and shape is not None:
-        write_figures(problem, out, heading, profile, scene.geometry.profile().polyline(),
-                      surface_lines(shape))
+    elif scene.output.figures and shape is not None:  # the whole die wall (the square die's
+        # face is all in Gamma3)
+        wall = None if shape.wall is None else scene.geometry.profile().polyline()
+        write_figures(problem, out, heading, profile, wall, surface_lines(shape))
     elif scene.output.figures:
         write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
@@ -268,15 +269,19 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         if "free_surface" in summary:
             surface = summary["free_surface"]
             size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key
+            contact = (f"the die corner at x = {surface['contact_end_x']:.5g}"
+                       if surface["contact_start_x"] == surface["contact_end_x"] else
+                       f"contact from x = {surface['contact_start_x']:.5g} to "
+                       f"{surface['contact_end_x']:.5g}")
+            stock = (f", stock {100 * summary['free_surface_crossing_stock']:.3g} %: not updated"
+                     if scene.process.kind == "drawing" else "")
             log.info("free surface: %s after %d updates, the product's %s %.6g (%+.3g %% from the "
-                     "die's), contact from x = %.5g to %.5g, crossing %.3g %% (product %.3g %%, "
-                     "stock %.3g %%: not updated), %d linear solves, %.1f s",
+                     "die's), %s, crossing %.3g %% (product %.3g %%%s), %d linear solves, %.1f s",
                      "settled" if surface["converged"] else "not settled",
                      surface["updates"], size.replace("_", " "), surface[size],
-                     100 * surface[f"{size}_change"], surface["contact_start_x"],
-                     surface["contact_end_x"], 100 * summary["free_surface_crossing"],
-                     100 * summary["free_surface_crossing_product"],
-                     100 * summary["free_surface_crossing_stock"],
+                     100 * surface[f"{size}_change"], contact,
+                     100 * summary["free_surface_crossing"],
+                     100 * summary["free_surface_crossing_product"], stock,
                      surface["linear_solves"], surface["wall_time_s"])
         if "accuracy" in summary:
             accuracy = summary["accuracy"]

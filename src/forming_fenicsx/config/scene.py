@@ -197,9 +197,6 @@ class Scene:
         if g.mesh_file is not None:
             raise SceneError("geometry.mesh_file", "a user's mesh has no geometry to move: the "
                              "free-surface update re-meshes the built-in workpiece")
-        if getattr(g, "die", "") == "square":
-            raise SceneError("geometry.die", "the free-surface update follows a profiled die "
-                             '(die = "conical"); the square die\'s product is not moved yet')
         if self.accuracy.target is not None:
             raise SceneError("accuracy.target", "accuracy on demand and the free-surface update "
                              "are not combined yet: give one or the other")

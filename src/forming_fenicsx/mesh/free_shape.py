@@ -1,8 +1,9 @@
 """The top boundary of a 2D workpiece whose product surface the flow decides
 (app/free_surface.py): the die wall where the workpiece touches it, from where contact starts to
 where it ends, then the product's free surface to the exit face. The stock's surface before the die
-(drawing) and the container (extrusion) stay as the scene draws them. mesh/geometry.py meshes it as
-the scene's own blocks, the product's surface a spline through its points.
+(drawing) and the container (extrusion) stay as the scene draws them, and so does the square die's
+face (Example 1), whose product leaves it at the die corner. mesh/geometry.py meshes it as the
+scene's own blocks, the product's surface a spline through its points.
 """
 from __future__ import annotations
 
@@ -16,16 +17,18 @@ from forming_fenicsx.config.scene import Scene
 
 @dataclass(frozen=True)
 class FreeShape:
-    """``wall``: the die wall in contact; ``downstream`` (M, 2): the product's free surface from
-    the end of contact to the exit face x = L."""
+    """``wall``: the die wall in contact (None: the square die, its face as drawn);
+    ``downstream`` (M, 2): the product's free surface from the end of contact to the exit face
+    x = L."""
 
-    wall: DieProfile
+    wall: DieProfile | None
     downstream: np.ndarray
 
     def height(self, x: np.ndarray) -> np.ndarray:
         """The top boundary's y at x along the wall and the product's surface (the wall's start
-        height before it)."""
-        line = np.vstack([self.wall.polyline(48), self.downstream])
+        height before it; the product's at the square die's corner)."""
+        wall = [] if self.wall is None else [self.wall.polyline(48)]
+        line = np.vstack([*wall, self.downstream])
         keep = np.concatenate([[True], np.diff(line[:, 0]) > 0])
         return np.interp(x, line[keep, 0], line[keep, 1])
 
@@ -39,8 +42,16 @@ def fixed_shape(scene: Scene) -> FreeShape:
     """The scene's own top boundary: the whole die wall, the product level at the exit size after
     it."""
     g = scene.geometry
+    if square_die(scene):
+        corner = (g.die_position, 0.5 * g.exit_thickness)
+        return FreeShape(None, np.array([corner, (g.length, corner[1])]))
     profile = g.profile()
     return FreeShape(profile, np.array([profile.end, (g.length, 0.5 * g.exit_thickness)]))
+
+
+def square_die(scene: Scene) -> bool:
+    """Whether the scene's die is Example 1's square die (no profile: a face normal to the axis)."""
+    return getattr(scene.geometry, "die", "") == "square"
 
 
 def wall_height(profile: DieProfile, x: float) -> float:

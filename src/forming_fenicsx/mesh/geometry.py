@@ -96,17 +96,19 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
         gmsh.model.setPhysicalName(1, ROLES[role], role)
 
 
-def _extrusion(scene: Scene, structured: bool = True) -> None:
+def _extrusion(scene: Scene, structured: bool = True, shape: FreeShape | None = None) -> None:
     """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at
-    (xd, h1)."""
+    (xd, h1). A ``shape`` (free_shape.py) makes the product's surface a spline through its points
+    from the corner to the exit face."""
     g, disc = scene.geometry, scene.discretisation
     h0, h1, xd, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.die_position, g.length
+    shape = fixed_shape(scene) if shape is None else shape
     size, grade = disc.mesh_size, disc.corner_grading
     n_xc, r_xc = graded_edge(xd, size, grade, toward_end=True)
     n_xe, r_xe = graded_edge(L - xd, size, grade, toward_end=False)
     n_y1, r_y1 = graded_edge(h1, size, grade, toward_end=True)
     n_y2, r_y2 = graded_edge(h0 - h1, size, grade, toward_end=False)
-    points = {"p1": (0, 0), "p2": (xd, 0), "p3": (L, 0), "p4": (L, h1),
+    points = {"p1": (0, 0), "p2": (xd, 0), "p3": (L, 0), "p4": (L, shape.exit_height),
               "p5": (xd, h1), "p6": (xd, h0), "p7": (0, h0), "p8": (0, h1)}
     edges = {
         "bottom_container": Edge("p1", "p2", n_xc, r_xc),
@@ -124,7 +126,9 @@ def _extrusion(scene: Scene, structured: bool = True) -> None:
     groups.setdefault("gamma4_free", []).append("exit_surface")
     groups["gamma3_contact"] = ["die_face", "container_wall"]
     groups["gamma6_symmetry"] = ["bottom_container", "bottom_exit"]
-    _add_blocks(points, edges, blocks, groups, structured=structured)
+    product = shape.downstream
+    splines = {"exit_surface": product[1:-1]} if len(product) > 2 else None
+    _add_blocks(points, edges, blocks, groups, structured=structured, splines=splines)
 
 
 def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
@@ -232,7 +236,7 @@ def shaped_mesh(scene: Scene, shape: FreeShape) -> Callable[[], None]:
     (free_shape.py), meshed by the scene's blocks."""
     def generate() -> None:
         gmsh.model.add(scene.process.kind)
-        _profiled(scene, shape=shape)
+        _builder(scene)(scene, shape=shape)
         mesh_model(2, scene.discretisation.degree)
 
     return generate

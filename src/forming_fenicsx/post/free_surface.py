@@ -5,7 +5,11 @@ axis is one too, the flux between them is the same through every section: the su
 level F(x, y) = int_0^y u_x w dy' = F(x0, y0) of the flux from the axis (w = y' axisymmetric, 1 in
 plane strain) through the point (x0, y0) where the contact ends (flux_surface). F is integrated
 across each of STEPS_PER_CELL sections per element along x, and the level found on it by Newton's
-method on Hermite's cubic (F and its derivative u_x w are known at the samples). The velocity is
+method on Hermite's cubic (F and its derivative u_x w are known at the samples). Where the contact
+ends at a corner toward which the mesh is graded, the first sections and their samples are as
+much closer (the corner's velocity turns within its small elements: sampled at the nominal
+spacing, the level there missed the flux and the product came out up to 1.3 % too thin,
+docs/free_surface.md). The velocity is
 evaluated by points.py. The slope dy/dx = v_y/v_x is not integrated: at a sticking wall's
 corner, where the contact may end, the velocity vanishes and its direction is noise
 (docs/free_surface.md).
@@ -33,46 +37,42 @@ from forming_fenicsx.mesh.free_shape import FreeShape, clipped, wall_height
 from forming_fenicsx.mesh.points import PointValues
 
 STEPS_PER_CELL = 4
+# the growth of the stations' spacing from a graded corner (flux_surface)
+GROWTH = 1.25
 # contact ends within this fraction of an element of a wall corner are moved onto it
 SNAP = 0.5
 
 
 def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
                  start: tuple[float, float], end_x: float, step: float, axisymmetric: bool,
-                 wall: DieProfile | None = None) -> tuple[np.ndarray, float | None]:
+                 wall: DieProfile | None = None, grading: float = 1.0
+                 ) -> tuple[np.ndarray, float | None]:
     """The surface y(x) under which the flux of u equals the flux at ``start``'s section,
     F(x, y) = int_0^y u_x w dy' = F(x0, y0) (w = y' axisymmetric, 1 in plane strain): the
     streamline through the start for a divergence-free u, at stations about ``step`` apart in x to
-    x = ``end_x``. F is integrated by Simpson's rule at samples ``step`` apart (or closer) from
-    the axis to the current top boundary ``top(x)``, and beyond it with u_x held at its value
-    there. With ``wall``, a point past the die wall is put back onto it.
+    x = ``end_x``. F is integrated by Simpson's rule at samples as far apart as the stations there
+    (or closer) from the axis to the current top boundary ``top(x)``, and beyond it with u_x held
+    at its value there. ``grading``: the mesh is that much finer at the start (a die corner graded
+    by discretisation.corner_grading), and so are the first stations and their samples
+    (_stations). With ``wall``, a point past the die wall is put back onto it.
     Returns the points (N, 2) and the last x put on the wall (None if none was). Collective."""
-    count = max(1, math.ceil((end_x - start[0]) / step))
-    xs = np.linspace(start[0], end_x, count + 1)
+    xs, spacings = _stations(start[0], end_x, step, grading)
     heights = np.maximum(top(xs), start[1])
-    cells = max(2, 2 * math.ceil(np.max(heights) / step / 2))  # even: Simpson
-    fractions = np.linspace(0.0, 1.0, cells + 1)
-    ys = heights[:, None] * fractions[None, :]
-    points = np.column_stack([np.repeat(xs, cells + 1), ys.ravel()])
+    # per station an even number of equal intervals (Simpson) no longer than its spacing
+    cells = np.maximum(2, 2 * np.ceil(heights / np.minimum(spacings, step) / 2)).astype(int)
+    ys = [height * np.linspace(0.0, 1.0, n + 1) for height, n in zip(heights, cells)]
+    points = np.column_stack([np.repeat(xs, cells + 1), np.concatenate(ys)])
     values, _ = PointValues([u]).evaluate(points, outside="extend")
-    along = values[:, 0].reshape(len(xs), cells + 1)
-    weight = ys if axisymmetric else np.ones_like(ys)
-    integrand = along * weight
-    # the flux from the axis to each even sample (Simpson), the odd ones by the trapezoid rule
-    spacing = (heights / cells)[:, None]
-    pairs = (integrand[:, :-2:2] + 4 * integrand[:, 1:-1:2] + integrand[:, 2::2]) / 3
-    cumulative = np.zeros_like(integrand)
-    cumulative[:, 2::2] = np.cumsum(pairs, axis=1) * spacing
-    cumulative[:, 1::2] = cumulative[:, :-1:2] + 0.5 * spacing * (integrand[:, :-1:2]
-                                                                  + integrand[:, 1::2])
-    first = _level(start[1], ys[0], cumulative[0], integrand[0])
+    along = np.split(values[:, 0], np.cumsum(cells + 1)[:-1])
+    samples = [_section(y, a, axisymmetric) for y, a in zip(ys, along)]
+    first = _level(start[1], ys[0], *samples[0])
     found = np.empty(len(xs))
-    for i in range(len(xs)):
-        total = cumulative[i, -1]
+    for i, (cumulative, integrand) in enumerate(samples):
+        total = cumulative[-1]
         if total >= first:
-            found[i] = _root(first, ys[i], cumulative[i], integrand[i])
+            found[i] = _root(first, ys[i], cumulative, integrand)
         else:  # beyond the top, u_x as at the top
-            rest = (first - total) / along[i, -1]
+            rest = (first - total) / along[i][-1]
             found[i] = (math.sqrt(heights[i] ** 2 + 2 * rest) if axisymmetric
                         else heights[i] + rest)
     found[0] = start[1]
@@ -84,6 +84,39 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
                 if found[i] > limit:
                     found[i], on_wall = limit, xs[i]
     return np.column_stack([xs, found]), on_wall
+
+
+def _stations(start: float, end: float, step: float, grading: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Stations from ``start`` to ``end`` about ``step`` apart, the first ``step / grading`` apart
+    and growing by GROWTH a station to ``step`` (uniform for ``grading`` 1); and the spacing at
+    each (the larger of the intervals it bounds)."""
+    count = max(1, math.ceil((end - start) / step))
+    if grading <= 1.0:
+        xs = np.linspace(start, end, count + 1)
+    else:
+        near, x, length = [start], start, step / grading
+        while length < step and x + length < end:
+            x += length
+            near.append(x)
+            length *= GROWTH
+        rest = max(1, math.ceil((end - x) / step))
+        xs = np.concatenate([near, np.linspace(x, end, rest + 1)[1:]])
+    gaps = np.diff(xs)
+    return xs, np.maximum(np.append(gaps, gaps[-1]), np.insert(gaps, 0, gaps[0]))
+
+
+def _section(ys: np.ndarray, along: np.ndarray, axisymmetric: bool
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """F and its derivative u_x w at the equally spaced samples ys of one station: F at the even
+    samples by Simpson's rule from the axis, at the odd ones by the trapezoid rule."""
+    integrand = along * (ys if axisymmetric else 1.0)
+    spacing = ys[1] - ys[0]
+    pairs = (integrand[:-2:2] + 4 * integrand[1:-1:2] + integrand[2::2]) / 3
+    cumulative = np.zeros_like(integrand)
+    cumulative[2::2] = np.cumsum(pairs) * spacing
+    cumulative[1::2] = cumulative[:-1:2] + 0.5 * spacing * (integrand[:-1:2] + integrand[1::2])
+    return cumulative, integrand
 
 
 def _hermite(t: float, h: float, f0: float, f1: float, d0: float, d1: float) -> tuple[float, float]:
@@ -118,17 +151,30 @@ def _root(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> f
     return ys[j] + t * h
 
 
-def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float) -> FreeShape:
+def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float | None
+                  ) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
-    with the die ends (flux_surface, module docstring); ``shape``'s contact start is kept.
+    with the die ends (flux_surface, module docstring), the square die's corner for its die;
+    ``shape``'s contact start is kept.
     Collective (every rank returns the same shape)."""
     scene = problem.scene
     g = scene.geometry
-    die = g.profile()
     size = scene.discretisation.mesh_size
+    if shape.wall is None:  # the square die: the product leaves its face at the corner
+        corner = (g.die_position, 0.5 * g.exit_thickness)
+        line, _ = flux_surface(problem.u, shape.height, corner, g.length, size / STEPS_PER_CELL,
+                               g.axisymmetric, grading=scene.discretisation.corner_grading)
+        return FreeShape(None, line)
+    die, disc = g.profile(), scene.discretisation
     end = min(max(contact_end_x, shape.wall.start[0]), die.end[0])
+    # a contact end within SNAP elements of a corner of the wall starts there (as clipped's), where
+    # the mesh is graded: by corner_grading at the die's exit, by wall_grading at another corner
+    corner = min([s.start[0] for s in die.segments] + [die.end[0]], key=lambda c: abs(c - end))
+    grading = 1.0
+    if abs(corner - end) <= SNAP * size:
+        end, grading = corner, disc.corner_grading if corner == die.end[0] else disc.wall_grading
     line, last = flux_surface(problem.u, shape.height, (end, wall_height(die, end)), g.length,
-                              size / STEPS_PER_CELL, g.axisymmetric, die)
+                              size / STEPS_PER_CELL, g.axisymmetric, die, grading)
     if last is not None and last > end + size:  # the product would enter the die after an
         # element (within one, the penalty's own penetration): the contact goes on
         end = last

@@ -201,7 +201,7 @@ def _update_hint(scene: Scene) -> str:
     surface."""
     g = scene.geometry
     if scene.free_surface.update or g.three_dimensional or g.mesh_file is not None \
-            or getattr(g, "die", "") == "square":
+            or scene.process.kind == "rolling":
         return ""
     return ("; free_surface.update = true makes the product's surface a streamline of the flow "
             "(docs/free_surface.md)")
