@@ -3,7 +3,7 @@
 where it ends, then the product's free surface to the exit face. The stock's surface before the die
 (drawing) and the container (extrusion) stay as the scene draws them, and so does the square die's
 face (Example 1), whose product leaves it at the die corner. mesh/geometry.py meshes it as the
-scene's own blocks, the product's surface a spline through its points.
+scene's own blocks, the product's nodes moved onto its surface (shaped_mesh).
 """
 from __future__ import annotations
 

@@ -57,13 +57,12 @@ class Edge:
 def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
                 blocks: list[list[str]], groups: dict[str, list[str]],
                 arcs: dict[str, tuple[float, float]] | None = None,
-                structured: bool = True, splines: dict[str, np.ndarray] | None = None) -> None:
+                structured: bool = True) -> None:
     """Add transfinite, recombined blocks to the current gmsh model (not transfinite unless
     ``structured``: the surfaces for a size field, mesh/adapted.py).
 
     A block is four edge names around it counter-clockwise; a leading '-' reverses an edge. An edge
-    named in ``arcs`` is the circular arc about the centre given there, one in ``splines`` the
-    spline through the points given there between its ends (a free surface), else a line.
+    named in ``arcs`` is the circular arc about the centre given there, else a line.
     """
     geo = gmsh.model.geo
     point_tags = {name: geo.addPoint(x, y, 0.0) for name, (x, y) in points.items()}
@@ -72,9 +71,6 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
         if arcs and name in arcs:
             centre = geo.addPoint(*arcs[name], 0.0)
             tag = geo.addCircleArc(point_tags[edge.start], centre, point_tags[edge.end])
-        elif splines and name in splines:
-            inner = [geo.addPoint(x, y, 0.0) for x, y in splines[name]]
-            tag = geo.addSpline([point_tags[edge.start], *inner, point_tags[edge.end]])
         else:
             tag = geo.addLine(point_tags[edge.start], point_tags[edge.end])
         if structured:
@@ -98,8 +94,8 @@ def _add_blocks(points: dict[str, tuple[float, float]], edges: dict[str, Edge],
 
 def _extrusion(scene: Scene, structured: bool = True, shape: FreeShape | None = None) -> None:
     """Example 1 half model: container [0, xd] x [0, h0], exit [xd, L] x [0, h1], die corner at
-    (xd, h1). A ``shape`` (free_shape.py) makes the product's surface a spline through its points
-    from the corner to the exit face."""
+    (xd, h1). A ``shape`` (free_shape.py) sets the product's height at the exit face (shaped_mesh
+    moves its surface onto the shape's)."""
     g, disc = scene.geometry, scene.discretisation
     h0, h1, xd, L = 0.5 * g.entry_thickness, 0.5 * g.exit_thickness, g.die_position, g.length
     shape = fixed_shape(scene) if shape is None else shape
@@ -126,9 +122,7 @@ def _extrusion(scene: Scene, structured: bool = True, shape: FreeShape | None = 
     groups.setdefault("gamma4_free", []).append("exit_surface")
     groups["gamma3_contact"] = ["die_face", "container_wall"]
     groups["gamma6_symmetry"] = ["bottom_container", "bottom_exit"]
-    product = shape.downstream
-    splines = {"exit_surface": product[1:-1]} if len(product) > 2 else None
-    _add_blocks(points, edges, blocks, groups, structured=structured, splines=splines)
+    _add_blocks(points, edges, blocks, groups, structured=structured)
 
 
 def _end_faces(scene: Scene, entry: list[str], exit: list[str]) -> dict[str, list[str]]:
@@ -154,8 +148,8 @@ def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = N
     the first and last blocks are graded toward the die entry and exit (corner_grading); with
     wall_grading > 1 each die segment is two blocks graded toward its ends (the corners where the
     wall's slope changes) and the thickness is graded toward the die wall. A ``shape``
-    (free_shape.py) replaces the die wall by its part in contact and the product's surface by a
-    spline.
+    (free_shape.py) replaces the die wall by its part in contact and sets the product's height at
+    the exit face (shaped_mesh moves its surface onto the shape's).
     """
     g, disc = scene.geometry, scene.discretisation
     h0, L = 0.5 * g.entry_thickness, g.length
@@ -186,9 +180,7 @@ def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = N
     groups.setdefault("gamma4_free", []).append(f"top{last - 1}")
     groups["gamma3_contact"] = wall
     groups["gamma6_symmetry"] = [f"bottom{i}" for i in range(last)]
-    product = shape.downstream
-    splines = {f"top{last - 1}": product[1:-1]} if len(product) > 2 else None
-    _add_blocks(points, edges, blocks, groups, arcs, structured, splines)
+    _add_blocks(points, edges, blocks, groups, arcs, structured)
 
 
 def _wall_pieces(segments: list[Segment], size: float, grading: float
@@ -232,14 +224,34 @@ def add_model(scene: Scene, structured: bool = True) -> None:
 
 
 def shaped_mesh(scene: Scene, shape: FreeShape) -> Callable[[], None]:
-    """A generator for build_mesh: the scene's profiled workpiece with the top boundary ``shape``
-    (free_shape.py), meshed by the scene's blocks."""
+    """A generator for build_mesh: the scene's workpiece with the top boundary ``shape``
+    (free_shape.py), meshed by the scene's blocks, the product's block with a straight top from
+    where its surface starts to the exit face, then stretched onto the surface (_follow)."""
     def generate() -> None:
         gmsh.model.add(scene.process.kind)
         _builder(scene)(scene, shape=shape)
         mesh_model(2, scene.discretisation.degree)
+        _follow(shape.downstream)
 
     return generate
+
+
+def _follow(surface: np.ndarray) -> None:
+    """Move the meshed nodes at and after the product surface's start x0 along y by
+    y_s(x) / y_l(x), y_s the surface (N, 2) and y_l the straight edge between its ends: the product
+    block's top onto the surface, its columns of nodes kept vertical (the block's bottom is the
+    axis, its corners stay). A spline edge instead is meshed by gmsh's own parameter, whose nodes
+    did not lie above the straight bottom's where the surface's points bunch at a graded corner:
+    skewed cells."""
+    (x0, y0), (x1, y1) = surface[0], surface[-1]
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    coords = coords.reshape(-1, 3)
+    after = coords[:, 0] >= x0 - 1e-12 * max(abs(x0), 1.0)
+    x = coords[after, 0]
+    line = y0 + (x - x0) / (x1 - x0) * (y1 - y0)
+    scale = np.interp(x, surface[:, 0], surface[:, 1]) / line
+    for tag, point, factor in zip(tags[after], coords[after], scale):
+        gmsh.model.mesh.setNode(int(tag), [point[0], point[1] * factor, 0.0], [])
 
 
 def mesh_model(dim: int, degree: int) -> None:

@@ -27,8 +27,8 @@ LAYER_POINTS = 8
 def exit_section(problem: FlowProblem, points: int) -> tuple[float, np.ndarray]:
     """The product's section half an exit thickness before the workpiece's end, x, and ``points``
     heights on it from the axis to the surface (the product's half-size at its end,
-    product.product_half_size; the last a hair inside, more so under a free surface, whose
-    spline the isoparametric cells follow to about 1e-7 of the size)."""
+    product.product_half_size; the last a hair inside, more so under a free surface, which the
+    isoparametric cells, their nodes on it, follow to about 1e-7 of the size)."""
     g, half = problem.scene.geometry, product_half_size(problem)
     inside = 1e-6 if problem.scene.free_surface.update else 1e-9
     return g.length - 0.5 * g.thinnest, np.linspace(0.0, half * (1 - inside), points)
