@@ -37,12 +37,6 @@ class StrainTangent:
         self._strain_vectors = strain, strain.duplicate()
         self._flow_vector = self.B.createVecs()[1]
 
-    @property
-    def active(self) -> bool:
-        """Whether the step carries the strain's derivative (strain_transport.py switches it on
-        once the coupling has settled)."""
-        return self.field.in_tangent
-
     def assemble(self) -> None:
         """B and C at the current u and eps = eps(u); rows and columns of constrained velocities are
         left out (their du is set by the Dirichlet rows of A)."""

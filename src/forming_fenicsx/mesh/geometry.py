@@ -22,7 +22,7 @@ from forming_fenicsx.config.mesh_file import gmsh_session, open_msh
 from forming_fenicsx.core.roles import ROLES, WORKPIECE
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.mesh.bar3d import rectangular_bar, round_bar
-from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape
+from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape, square_die
 from forming_fenicsx.mesh.grading import graded_edge
 
 
@@ -209,7 +209,7 @@ def _builder(scene: Scene):
     g = scene.geometry
     if g.three_dimensional:
         return round_bar if g.shape == "round" else rectangular_bar
-    return _extrusion if getattr(g, "die", "") == "square" else _profiled
+    return _extrusion if square_die(scene) else _profiled
 
 
 def add_model(scene: Scene, structured: bool = True) -> None:

@@ -161,7 +161,7 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float |
     g = scene.geometry
     size = scene.discretisation.mesh_size
     if shape.wall is None:  # the square die: the product leaves its face at the corner
-        corner = (g.die_position, 0.5 * g.exit_thickness)
+        corner = tuple(shape.downstream[0])
         line, _ = flux_surface(problem.u, shape.height, corner, g.length, size / STEPS_PER_CELL,
                                g.axisymmetric, grading=scene.discretisation.corner_grading)
         return FreeShape(None, line)
