@@ -1,8 +1,9 @@
 """The free surfaces the flow decides: the flow solved on the scene's domain, then alternately the
 surface made of streamlines of the last flow (post/free_surface.py) and the flow solved again on
 the workpiece re-meshed under it (mesh/geometry.shaped_mesh), started from the last velocity
-interpolated onto the new mesh (mesh/transfer.py), until the surface moves by less than
-free_surface.tolerance times the exit half-size (docs/free_surface.md)."""
+interpolated onto the new mesh (mesh/transfer.py), until the surfaces move by less than
+free_surface.tolerance times the exit half-size and the stock's streamline meets the die wall
+within that (docs/free_surface.md)."""
 from __future__ import annotations
 
 import logging
@@ -42,7 +43,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     solves, moved, converged = summary["linear_solves"], 0, False
     while summary["iteration_converged"]:
         new = updated_shape(problem, shape, summary.get("contact_end_x"))  # none: square
-        move = shape_change(shape, new, scene.geometry.length) / h1
+        move = max(shape_change(shape, new, scene.geometry.length), new.stock_miss) / h1
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],
@@ -60,13 +61,16 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
                                          if comm.rank == 0 else None)
         solves += summary["linear_solves"]
         folded = folded_cells(problem.mesh)
-        if folded:  # the last shape's solve stands: this mesh's cannot be trusted (quality.py)
+        failed = "" if summary["iteration_converged"] else summary["reason"]
+        if folded or failed:  # the last shape's solve stands: this mesh's cannot be trusted
+            # (quality.py), or its flow was not found
             problem, result, summary, shape = last
             moved -= 1
+            why = (f"re-meshed the workpiece with {folded} folded cells (not convex)" if folded
+                   else f"gave a flow that did not converge ({failed})")
             summary["warnings"].append(
-                f"the free surface's update {moved + 1} re-meshed the workpiece with {folded} "
-                "folded cells (not convex): the update stopped, and the shape and the forces are "
-                f"those of update {moved}")
+                f"the free surface's update {moved + 1} {why}: the update stopped, and the shape "
+                f"and the forces are those of update {moved}")
             break
     summary["free_surface"] = {
         "converged": converged, "updates": moved, "tolerance": settings.tolerance,
@@ -99,5 +103,7 @@ def shape_scalars(scene: Scene, shape: FreeShape) -> dict[str, float]:
 
 
 def surface_lines(shape: FreeShape) -> dict[str, np.ndarray]:
-    """The free surfaces found, by name: "product", after the die (the stock's is as drawn)."""
-    return {"product": shape.downstream}
+    """The free surfaces found, by name: "stock", before a drawing die (when it was updated), and
+    "product", after the die."""
+    stock = {} if shape.upstream is None else {"stock": shape.upstream}
+    return {**stock, "product": shape.downstream}

@@ -273,7 +273,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                        if surface["contact_start_x"] == surface["contact_end_x"] else
                        f"contact from x = {surface['contact_start_x']:.5g} to "
                        f"{surface['contact_end_x']:.5g}")
-            stock = (f", stock {100 * summary['free_surface_crossing_stock']:.3g} %: not updated"
+            stock = (f", stock {100 * summary['free_surface_crossing_stock']:.3g} %"
                      if scene.process.kind == "drawing" else "")
             log.info("free surface: %s after %d updates, the product's %s %.6g (%+.3g %% from the "
                      "die's), %s, crossing %.3g %% (product %.3g %%%s), %d linear solves, %.1f s",

@@ -1,9 +1,9 @@
-"""The top boundary of a 2D workpiece whose product surface the flow decides
-(app/free_surface.py): the die wall where the workpiece touches it, from where contact starts to
-where it ends, then the product's free surface to the exit face. The stock's surface before the die
-(drawing) and the container (extrusion) stay as the scene draws them, and so does the square die's
+"""The top boundary of a 2D workpiece whose free surfaces the flow decides (app/free_surface.py):
+the stock's free surface before a drawing die, from the entry face to where contact starts, the
+die wall where the workpiece touches it, to where contact ends, then the product's free surface to
+the exit face. The container (extrusion) stays as the scene draws it, and so does the square die's
 face (Example 1), whose product leaves it at the die corner. mesh/geometry.py meshes it as the
-scene's own blocks, the product's nodes moved onto its surface (shaped_mesh).
+scene's own blocks, the stock's and the product's nodes moved onto their surfaces (shaped_mesh).
 """
 from __future__ import annotations
 
@@ -19,16 +19,24 @@ from forming_fenicsx.config.scene import Scene
 class FreeShape:
     """``wall``: the die wall in contact (None: the square die, its face as drawn);
     ``downstream`` (M, 2): the product's free surface from the end of contact to the exit face
-    x = L."""
+    x = L; ``upstream`` (K, 2): the stock's free surface from the entry face x = 0 to the start of
+    contact (None: level at the stock's size up to the die, as drawn); ``stock_miss``: how far the
+    stock's streamline of the flow this shape was made from passed under (or over) the wall at
+    that flow's contact start (post/free_surface.updated_stock), zero at a steady stock, and
+    ``stock_step`` that flow's contact start with how far from it the streamline met the wall."""
 
     wall: DieProfile | None
     downstream: np.ndarray
+    upstream: np.ndarray | None = None
+    stock_miss: float = 0.0
+    stock_step: tuple[float, float] | None = None
 
     def height(self, x: np.ndarray) -> np.ndarray:
-        """The top boundary's y at x along the wall and the product's surface (the wall's start
-        height before it; the product's at the square die's corner)."""
+        """The top boundary's y at x along the stock's surface, the wall and the product's surface
+        (the first of them extended level before its start)."""
+        stock = [] if self.upstream is None else [self.upstream]
         wall = [] if self.wall is None else [self.wall.polyline(48)]
-        line = np.vstack([*wall, self.downstream])
+        line = np.vstack([*stock, *wall, self.downstream])
         keep = np.concatenate([[True], np.diff(line[:, 0]) > 0])
         return np.interp(x, line[keep, 0], line[keep, 1])
 
@@ -60,17 +68,19 @@ def wall_height(profile: DieProfile, x: float) -> float:
     return profile.radius_at(x)
 
 
-def clipped(profile: DieProfile, start: float, end: float, snap: float) -> DieProfile:
+def clipped(profile: DieProfile, start: float, end: float, snap: float,
+            start_snap: float | None = None) -> DieProfile:
     """The die wall from x = ``start`` to x = ``end``, the ends moved onto a corner of the wall
-    (where segments meet) within ``snap`` of it, so that no piece is much shorter than an
-    element."""
+    (where segments meet) within ``snap`` (the start: ``start_snap``, default ``snap``) of it, so
+    that no piece is much shorter than an element."""
     corners = [s.start[0] for s in profile.segments] + [profile.end[0]]
 
-    def snapped(x: float) -> float:
+    def snapped(x: float, within: float) -> float:
         nearest = min(corners, key=lambda c: abs(c - x))
-        return nearest if abs(nearest - x) <= snap else x
+        return nearest if abs(nearest - x) <= within else x
 
-    start, end = snapped(start), snapped(end)
+    start = snapped(start, snap if start_snap is None else start_snap)
+    end = snapped(end, snap)
     pieces = []
     for segment in profile.segments:
         a, b = max(segment.start[0], start), min(segment.end[0], end)

@@ -148,8 +148,9 @@ def _profiled(scene: Scene, structured: bool = True, shape: FreeShape | None = N
     the first and last blocks are graded toward the die entry and exit (corner_grading); with
     wall_grading > 1 each die segment is two blocks graded toward its ends (the corners where the
     wall's slope changes) and the thickness is graded toward the die wall. A ``shape``
-    (free_shape.py) replaces the die wall by its part in contact and sets the product's height at
-    the exit face (shaped_mesh moves its surface onto the shape's).
+    (free_shape.py) replaces the die wall by its part in contact, the stock's block then reaching
+    to where the contact starts, and sets the product's height at the exit face (shaped_mesh moves
+    the stock's and the product's surfaces onto the shape's).
     """
     g, disc = scene.geometry, scene.discretisation
     h0, L = 0.5 * g.entry_thickness, g.length
@@ -225,32 +226,34 @@ def add_model(scene: Scene, structured: bool = True) -> None:
 
 def shaped_mesh(scene: Scene, shape: FreeShape) -> Callable[[], None]:
     """A generator for build_mesh: the scene's workpiece with the top boundary ``shape``
-    (free_shape.py), meshed by the scene's blocks, the product's block with a straight top from
-    where its surface starts to the exit face, then stretched onto the surface (_follow)."""
+    (free_shape.py), meshed by the scene's blocks, the stock's and the product's blocks with a
+    straight top between their surface's ends, then stretched onto the surface (_follow)."""
     def generate() -> None:
         gmsh.model.add(scene.process.kind)
         _builder(scene)(scene, shape=shape)
         mesh_model(2, scene.discretisation.degree)
-        _follow(shape.downstream)
+        for surface in (shape.upstream, shape.downstream):
+            if surface is not None:
+                _follow(surface)
 
     return generate
 
 
 def _follow(surface: np.ndarray) -> None:
-    """Move the meshed nodes at and after the product surface's start x0 along y by
-    y_s(x) / y_l(x), y_s the surface (N, 2) and y_l the straight edge between its ends: the product
-    block's top onto the surface, its columns of nodes kept vertical (the block's bottom is the
-    axis, its corners stay). A spline edge instead is meshed by gmsh's own parameter, whose nodes
-    did not lie above the straight bottom's where the surface's points bunch at a graded corner:
-    skewed cells."""
+    """Move the meshed nodes between the surface's ends x0 and x1 along y by y_s(x) / y_l(x),
+    y_s the surface (N, 2) and y_l the straight edge between its ends: the block's top onto the
+    surface, its columns of nodes kept vertical (the block's bottom is the axis, its corners
+    stay). A spline edge instead is meshed by gmsh's own parameter, whose nodes did not lie above
+    the straight bottom's where the surface's points bunch at a graded corner: skewed cells."""
     (x0, y0), (x1, y1) = surface[0], surface[-1]
     tags, coords, _ = gmsh.model.mesh.getNodes()
     coords = coords.reshape(-1, 3)
-    after = coords[:, 0] >= x0 - 1e-12 * max(abs(x0), 1.0)
-    x = coords[after, 0]
+    slack = 1e-12 * max(abs(x0), abs(x1), 1.0)
+    inside = (coords[:, 0] >= x0 - slack) & (coords[:, 0] <= x1 + slack)
+    x = coords[inside, 0]
     line = y0 + (x - x0) / (x1 - x0) * (y1 - y0)
     scale = np.interp(x, surface[:, 0], surface[:, 1]) / line
-    for tag, point, factor in zip(tags[after], coords[after], scale):
+    for tag, point, factor in zip(tags[inside], coords[inside], scale):
         gmsh.model.mesh.setNode(int(tag), [point[0], point[1] * factor, 0.0], [])
 
 

@@ -1,4 +1,5 @@
-"""The product's free surface made a streamline of the flow (v.n = 0), and where the contact ends.
+"""The free surfaces made streamlines of the flow (v.n = 0): the product's after the die and
+where the contact with the die ends, the stock's before a drawing die and where the contact starts.
 
 In 2D a free surface y(x) is a streamline (x along the axis, y the half-size or radius). Since the
 axis is one too, the flux between them is the same through every section: the surface is the
@@ -18,10 +19,20 @@ The product's surface starts where the contact with the die ends: the last node 
 positive contact pressure (a contact whose pressure would be tensile has released, and the
 penalty's pressure is zero where the workpiece moves away from the die). A surface that would
 enter the die after that lies on the wall instead (the contact goes on), and leaves it where the
-streamline from the wall turns inward. The stock's surface before a drawing die is kept as the
-scene draws it (docs/free_surface.md: in the finite-element flow it dips before the die entry over
-elements that shrink with the mesh, the die entry's velocity jump smeared, and moving the contact
-start after it does not settle).
+streamline from the wall turns inward.
+
+The stock's surface before a drawing die is the streamline from the entry face's edge (x = 0,
+y = h0): the flux level of the whole throughput (updated_stock). Where flow crossed the stock's
+surface into the workpiece, that streamline passes under the die wall at the contact start, by the
+height of the flux that crossed; continued at its slope it meets the wall further on. Where it
+rose over the wall before the contact start, it meets the wall there. The contact start moves
+toward that meeting point: half way at the first update, then by the secant step on the meeting
+point's offset (the offset falls as the start moves on), at most an element an update. The surface
+is the streamline up to the old start, then Hermite's cubic tangent to it and to the wall at the
+new start: the velocity there is along both. A bulge above the stock's size is kept as drawn.
+A soft stock narrows before the die over a length that does not shrink with the mesh; on a
+perfectly plastic stock the dip is the die entry's velocity jump smeared over elements, and the
+contact start tends to the die entry as the mesh is refined (docs/free_surface.md).
 """
 from __future__ import annotations
 
@@ -41,6 +52,14 @@ STEPS_PER_CELL = 4
 GROWTH = 1.25
 # contact ends within this fraction of an element of a wall corner are moved onto it
 SNAP = 0.5
+# the contact start moves by this fraction of the way to where the stock's streamline meets the
+# wall until a secant step exists (ratios 0.7 and 1 oscillated on an annealed rod: 0.5 settled in
+# 3 updates, docs/free_surface.md), and by at most MAX_SHIFT elements an update (2 sent Example 2
+# at mu = 0.4 to a contact start where the flow did not converge)
+STOCK_RELAXATION = 0.5
+MAX_SHIFT = 1.0
+# a contact start within this fraction of an element of a wall corner is moved onto it
+START_SNAP = 0.05
 
 
 def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
@@ -151,11 +170,71 @@ def _root(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> f
     return ys[j] + t * h
 
 
+def updated_stock(problem: FlowProblem, shape: FreeShape
+                  ) -> tuple[np.ndarray, float, float, tuple[float, float]]:
+    """The stock's surface before a drawing die made the streamline of the flow from the entry
+    face's edge (x = 0, y = h0), and the contact start moved toward where that streamline meets the
+    die wall (module docstring). Returns the surface, from x = 0 to the wall at the new contact
+    start, that start, how far under the wall the streamline passed the old one (the flux that
+    crossed the stock's surface, as a height), and the old start with how far the streamline's
+    meeting point lay from it. Collective."""
+    scene = problem.scene
+    g, size = scene.geometry, scene.discretisation.mesh_size
+    die, h0, start = g.profile(), 0.5 * g.entry_thickness, shape.wall.start[0]
+    line, _ = flux_surface(problem.u, shape.height, (0.0, h0), start, size / STEPS_PER_CELL,
+                           g.axisymmetric)
+    x, y = line[:, 0], np.minimum(line[:, 1], h0)  # a bulge above the stock is kept as drawn
+    wall = np.array([wall_height(die, xi) for xi in x])
+    gap = wall[-1] - y[-1]
+    if gap > 0:  # under the wall by the flux that crossed the stock's surface: continued at its
+        # slope, the streamline meets the wall where the gap closes
+        ahead = min(start + 0.5 * size, die.land_start)
+        closing = ((y[-1] - y[-2]) / (x[-1] - x[-2])
+                   - (wall_height(die, ahead) - wall[-1]) / max(ahead - start, 1e-300))
+        target = start + gap / closing if closing > 0 else math.inf
+    else:  # the streamline meets the wall before the contact start: there (linearly between
+        # the stations)
+        below = wall - y
+        i = int(np.argmax((x >= die.start[0]) & (below <= 0)))
+        t = below[i - 1] / (below[i - 1] - below[i]) if i > 0 and below[i - 1] > 0 else 1.0
+        target = float(x[i - 1] + t * (x[i] - x[i - 1])) if i > 0 else float(x[i])
+    moved = _next_start(start, target - start, shape.stock_step, size)
+    moved = max(min(moved, die.land_start - size), die.start[0])
+    keep = x < min(moved, start) - 1e-9 * size
+    surface = np.column_stack([x[keep], np.where(x[keep] >= die.start[0],
+                                                 np.minimum(y[keep], wall[keep]), y[keep])])
+    join = [(moved, wall_height(die, moved))]
+    if moved > start:  # Hermite's cubic from the streamline's end to the wall, tangent to both:
+        # the velocity at the contact start is along the wall and along the free surface
+        h, slope = moved - start, (y[-1] - y[-2]) / (x[-1] - x[-2])
+        ahead = min(moved + 0.5 * size, die.land_start)
+        wall_slope = (wall_height(die, ahead) - join[0][1]) / max(ahead - moved, 1e-300)
+        ts = np.linspace(0.0, 1.0, max(2, math.ceil(h * STEPS_PER_CELL / size)) + 1)
+        join = [(start + t * h, _hermite(t, h, y[-1], join[0][1], slope, wall_slope)[0])
+                for t in ts]
+    return np.vstack([surface, join]), moved, float(gap), (start, target - start)
+
+
+def _next_start(start: float, residual: float, previous: tuple[float, float] | None,
+                size: float) -> float:
+    """The next contact start from the meeting point's offset ``residual`` at ``start`` (infinite:
+    the streamline never meets the wall): the secant step on r(c) = 0 through the previous
+    update's (c, r), where r falls as c rises, else STOCK_RELAXATION of the offset; at most
+    MAX_SHIFT elements."""
+    step = STOCK_RELAXATION * residual
+    if previous is not None and previous[0] != start and math.isfinite(residual + previous[1]):
+        slope = (residual - previous[1]) / (start - previous[0])
+        if slope < 0:
+            step = -residual / slope
+    return start + min(max(step, -MAX_SHIFT * size), MAX_SHIFT * size)
+
+
 def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float | None
                   ) -> FreeShape:
     """The product's surface made the streamline of the problem's velocity from where the contact
-    with the die ends (flux_surface, module docstring), the square die's corner for its die;
-    ``shape``'s contact start is kept.
+    with the die ends (flux_surface, module docstring), the square die's corner for its die; a
+    drawing die's stock surface and contact start updated too (updated_stock), an extrusion's
+    contact start kept.
     Collective (every rank returns the same shape)."""
     scene = problem.scene
     g = scene.geometry
@@ -166,7 +245,10 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float |
                                g.axisymmetric, grading=scene.discretisation.corner_grading)
         return FreeShape(None, line)
     die, disc = g.profile(), scene.discretisation
-    end = min(max(contact_end_x, shape.wall.start[0]), die.end[0])
+    upstream, start, gap, step = None, shape.wall.start[0], 0.0, None
+    if scene.process.kind == "drawing":
+        upstream, start, gap, step = updated_stock(problem, shape)
+    end = min(max(contact_end_x, start), die.end[0])
     # a contact end within SNAP elements of a corner of the wall starts there (as clipped's), where
     # the mesh is graded: by corner_grading at the die's exit, by wall_grading at another corner
     corner = min([s.start[0] for s in die.segments] + [die.end[0]], key=lambda c: abs(c - end))
@@ -179,9 +261,14 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float |
         # element (within one, the penalty's own penetration): the contact goes on
         end = last
         line = line[line[:, 0] >= end]
-    wall = clipped(die, shape.wall.start[0], end, SNAP * size)
+    # the stock's contact start moves by less than an element: snapped to the die entry it would
+    # not move at all
+    wall = clipped(die, start, end, SNAP * size, START_SNAP * size)
     downstream = np.vstack([wall.end, line[line[:, 0] > wall.end[0] + 1e-9 * size]])
-    return FreeShape(wall, downstream)
+    if upstream is not None:  # the stock's surface ends where the clipped wall starts
+        upstream = np.vstack([upstream[upstream[:, 0] < wall.start[0] - 1e-9 * size],
+                              wall.start])
+    return FreeShape(wall, downstream, upstream, abs(gap), step)
 
 
 def shape_change(old: FreeShape, new: FreeShape, length: float, points: int = 2001) -> float:
