@@ -86,7 +86,7 @@ def test_die_plot_labels_settings_and_parts(wire):
         return
     stresses, profile = saved["die.png"].axes
     assert stresses.get_xlabel() == \
-        "s, distance along the die from where the workpiece meets it [mm]"
+        "s, distance along the die from its entry [mm]"
     assert stresses.get_ylabel() == "stress on the die [MPa]"
     curves = [t.get_text() for t in stresses.get_legend().get_texts()][2:]
     assert curves == ["contact pressure -sigma_N", "averaged normal stress",

@@ -57,7 +57,7 @@ def write_die_plot(profile: dict, path: Path, heading: Heading, scene: Scene) ->
     for key in shown:
         ax.plot(profile["s"], units.shown("stress", profile[key], largest)[0], marker=".",
                 label="".join(names[key]))
-    ax.set_xlabel(units.labelled("s, distance along the die from where the workpiece meets it",
+    ax.set_xlabel(units.labelled("s, distance along the die from its entry",
                                  "length"))
     ax.set_ylabel(bracketed("stress on the die", unit))
     heading.put(ax, "stresses on the die")

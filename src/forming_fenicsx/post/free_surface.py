@@ -53,9 +53,9 @@ GROWTH = 1.25
 # contact ends within this fraction of an element of a wall corner are moved onto it
 SNAP = 0.5
 # the contact start moves by this fraction of the way to where the stock's streamline meets the
-# wall until a secant step exists (ratios 0.7 and 1 oscillated on an annealed rod: 0.5 settled in
-# 3 updates, docs/free_surface.md), and by at most MAX_SHIFT elements an update (2 sent Example 2
-# at mu = 0.4 to a contact start where the flow did not converge)
+# wall until a secant step exists (a fixed fraction of 1 did not settle on an annealed rod, 0.7
+# swung, docs/free_surface.md), and by at most MAX_SHIFT elements an update (2 sent Example 2 at
+# mu = 0.4 to a contact start where the flow did not converge)
 STOCK_RELAXATION = 0.5
 MAX_SHIFT = 1.0
 # a contact start within this fraction of an element of a wall corner is moved onto it
