@@ -176,6 +176,31 @@ def test_an_update_onto_a_folded_mesh_is_not_taken(monkeypatch):
     assert any("2 folded cells" in warning for warning in summary["warnings"])
 
 
+def test_an_update_whose_flow_does_not_converge_is_not_taken():
+    """Example 2 (mu = 0, three updates when they converge) with the flow on the second shape
+    reported unconverged: the run keeps the first update's shape, its solve and its forces, and
+    says why."""
+    scene = load_scene(EXAMPLE2, ["free_surface.update=true", "output.fields=false",
+                                  "output.figures=false"])
+    calls = []
+
+    def solve(previous, generate):
+        problem, result, summary = solve_scene(scene, previous=previous, generate=generate)
+        calls.append(summary)
+        if len(calls) == 3:
+            summary = {**summary, "iteration_converged": False, "reason": "a forced failure"}
+        return problem, result, summary
+
+    _, _, summary, shape = solve_free_surface(scene, solve)
+    table = summary["free_surface"]
+    assert len(calls) == 3 and table["updates"] == 1 and not table["converged"]
+    assert summary["drawing_stress"] == calls[1]["drawing_stress"]
+    assert table["contact_start_x"] == pytest.approx(shape.wall.start[0])
+    assert shape.wall.start[0] > scene.geometry.profile().start[0]
+    assert any("update 2 gave a flow that did not converge (a forced failure)" in warning
+               for warning in summary["warnings"])
+
+
 def test_a_domain_whose_surfaces_are_streamlines_is_kept():
     """The same rod with its 2 mm bearing: the product leaves the bearing level, the first
     update would move the surface by 4.2e-4 of the radius, and the scene's domain is the answer
