@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from forming_fenicsx.app.free_surface import solve_free_surface
 from forming_fenicsx.app.run import run_scene, solve_scene
-from forming_fenicsx.config.loader import load_scene, scene_from_dict
+from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.mesh.free_shape import FreeShape
@@ -256,22 +256,17 @@ def test_run_writes_the_free_surface(shared_tmp):
 
 
 def test_an_annealed_rod_leaves_its_stock_before_the_die():
-    """A rod of annealed low-carbon steel (Hollomon from zero strain) drawn 8 -> 7 mm through a
-    10 degree die, mu = 0.08, on a 0.4 mm mesh: the soft stock narrows before it reaches the die,
-    so that on the scene's domain 2.87 % of the throughput crosses the stock's surface. The update
-    makes that surface a streamline: it dips before the die entry (0.04 mm under the stock there),
-    the contact starts 0.32 mm after the entry (15.09 on meshes of 0.4, 0.233 and 0.12 mm), the
-    stock's crossing falls to 0.17 % and the drawing stress from 164.3 to 151.6 MPa (151.0 on the
-    finer meshes: docs/free_surface.md)."""
+    """demos/annealed_rod_drawing.toml: a rod of annealed low-carbon steel (Hollomon from zero
+    strain) drawn 8 -> 7 mm through a 10 degree die, mu = 0.08, on a 0.4 mm mesh: the soft stock
+    narrows before it reaches the die, so that on the scene's domain 2.87 % of the throughput
+    crosses the stock's surface. The update makes that surface a streamline: it dips before the
+    die entry (0.04 mm under the stock there), the contact starts 0.32 mm after the entry (15.09
+    on meshes of 0.4, 0.233 and 0.12 mm), the stock's crossing falls to 0.17 % and the drawing
+    stress from 164.3 to 151.6 MPa (151.0 on the finer meshes: docs/free_surface.md)."""
     def rod(update: bool):
-        return scene_from_dict({
-            "process": {"kind": "drawing", "velocity": 500.0},
-            "geometry": {"symmetry": "axisymmetric", "entry_diameter": 8.0,
-                         "exit_diameter": 7.0, "die_angle": 10.0, "land_length": 1.0},
-            "material": {"name": "low_carbon_steel_annealed"}, "friction": {"mu": 0.08},
-            "discretisation": {"mesh_size": 0.4}, "free_surface": {"update": update},
-            "output": {"fields": False, "figures": False},
-            "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"}})
+        return load_scene(DEMOS / "annealed_rod_drawing.toml", [
+            "discretisation.mesh_size=0.4", f"free_surface.update={str(update).lower()}",
+            "output.fields=false", "output.figures=false"])
 
     fixed = solve_scene(rod(False))[2]
     scene = rod(True)
