@@ -357,13 +357,15 @@ def test_the_square_dies_product_leaves_its_corner_as_a_streamline():
 
 def test_the_crossing_warning_names_the_update_where_it_applies():
     """A crossing above 5 % of the throughput warns; on a 2D die without the update the message
-    says that free_surface.update moves the product's surface (the square die's too), on the
-    rolled strip, whose rolls the update does not follow, not."""
+    says that free_surface.update moves the stock's and the product's surfaces (a drawing die)
+    or the product's (the square die), on the rolled strip, whose rolls the update does not
+    follow, not."""
     drawing = free_surfaces({"free_surface_crossing": 0.08}, load_scene(EXAMPLE2))
     square = free_surfaces({"free_surface_crossing": 0.08},
                            load_scene(DEMOS / "example1_extrusion.toml"))
     rolled = free_surfaces({"free_surface_crossing": 0.08},
                            load_scene(DEMOS / "strip_rolling.toml"))
-    assert "free_surface.update = true" in drawing.message and not drawing.failure
-    assert "free_surface.update = true" in square.message
+    assert "free_surface.update = true makes the stock's and the product's surfaces" \
+        in drawing.message and not drawing.failure
+    assert "free_surface.update = true makes the product's surface a" in square.message
     assert "free_surface.update" not in rolled.message

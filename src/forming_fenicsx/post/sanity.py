@@ -197,14 +197,15 @@ def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
 
 
 def _update_hint(scene: Scene) -> str:
-    """Where the free-surface update applies and is off: that it can move the product's
-    surface."""
+    """Where the free-surface update applies and is off: the surfaces it can move (the stock's
+    too before a drawing die)."""
     g = scene.geometry
     if scene.free_surface.update or g.three_dimensional or g.mesh_file is not None \
             or scene.process.kind == "rolling":
         return ""
-    return ("; free_surface.update = true makes the product's surface a streamline of the flow "
-            "(docs/free_surface.md)")
+    surfaces = ("the stock's and the product's surfaces streamlines"
+                if scene.process.kind == "drawing" else "the product's surface a streamline")
+    return (f"; free_surface.update = true makes {surfaces} of the flow (docs/free_surface.md)")
 
 
 def die_contact(summary: dict[str, Any], scene: Scene) -> Finding | None:
