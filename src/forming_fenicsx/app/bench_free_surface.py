@@ -39,8 +39,8 @@ def run_free_surface_case(case: dict[str, Any]) -> dict[str, Any]:
         *settings, "output.fields=false", "output.figures=false",
         f"free_surface.update={'true' if case['update'] else 'false'}"])
     if case["update"]:
-        summary = solve_free_surface(scene, lambda previous, generate: solve_scene(
-            scene, previous=previous, generate=generate))[2]
+        summary = solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
+            variant, previous=previous, generate=generate))[2]
         table = summary["free_surface"]
         solves, wall = table["linear_solves"], table["wall_time_s"]
         extra = {"updates": table["updates"], "settled": table["converged"],

@@ -48,15 +48,17 @@ log = logging.getLogger(__name__)
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
                 comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None,
                 restart: Path | None = None, previous: dolfinx.fem.Function | None = None,
-                generate: Callable[[], None] | None = None
+                generate: Callable[[], None] | None = None, quiet: bool = False
                 ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
     folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
     mesh of the workpiece that starts it interpolated (transfer.py); ``generate`` meshes the
-    workpiece instead of the scene's blocks (an adapted mesh, mesh/adapted.py). Timed from when
-    every rank has entered (a rank still starting its interpreter is not the run's time)."""
+    workpiece instead of the scene's blocks (an adapted mesh, mesh/adapted.py); ``quiet``: the
+    summary's warnings are not logged (the free surface's intermediate flows: it logs its last
+    one's). Timed from when every rank has entered (a rank still starting its interpreter is not
+    the run's time)."""
     comm.barrier()
     start = time.perf_counter()
     problem = coupled_problem(scene, build_mesh(scene, comm, generate))
@@ -94,17 +96,17 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
         "time_split_s": time_split(comm, setup, result, post),
     }
-    return problem, result, summarise(body, result, scene, comm)
+    return problem, result, summarise(body, result, scene, comm, quiet)
 
 
-def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm
-              ) -> dict[str, Any]:
+def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm,
+              quiet: bool = False) -> dict[str, Any]:
     """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
     converged (a failed check means it did not, whatever the iteration did) and why, the units, then
     the run's numbers. The reason leads with what the run measured: a failed check of a converged
     iteration, or a cause (the law's rate window, drawability) found at the last iterate of one that
-    stopped, before the iteration's own reason. Warnings are logged on rank 0 (a failure is the
-    reason the command prints)."""
+    stopped, before the iteration's own reason. Warnings are logged on rank 0 unless ``quiet`` (a
+    failure is the reason the command prints)."""
     findings = check_run(body, scene, result.converged)
     failures = [f.message for f in findings if f.failure]
     converged = result.converged and not failures
@@ -120,10 +122,14 @@ def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI
                "failed_checks": failures, "converged": converged, "reason": reason,
                "iteration_converged": result.converged,
                "units": scene.units.summary(list(body), scene.geometry.whole_forces), **body}
-    if comm.rank == 0:
-        for text in summary["warnings"]:
-            log.warning("warning: %s", text)
+    if comm.rank == 0 and not quiet:
+        log_warnings(summary["warnings"])
     return summary
+
+
+def log_warnings(warnings: list[str]) -> None:
+    for text in warnings:
+        log.warning("warning: %s", text)
 
 
 def time_split(comm: MPI.Comm, setup: float, result: SolveResult, post: float) -> dict[str, float]:
@@ -187,8 +193,11 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
             raise ValueError("--restart starts one run on the same mesh; free_surface.update "
                              "re-meshes the workpiece at each update: give one or the other")
         problem, result, summary, shape = solve_free_surface(
-            scene, lambda previous, generate: solve_scene(
-                scene, petsc_options, comm, stop, previous=previous, generate=generate), comm)
+            scene, lambda variant, previous, generate: solve_scene(
+                variant, petsc_options, comm, stop, previous=previous, generate=generate,
+                quiet=True), comm)
+        if comm.rank == 0:
+            log_warnings(summary["warnings"])
     elif scene.accuracy.target is None:
         problem, result, summary = solve_scene(scene, petsc_options, comm, stop, restart)
     else:

@@ -79,21 +79,22 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     heights = np.maximum(top(xs), start[1])
     # per station an even number of equal intervals (Simpson) no longer than its spacing
     cells = np.maximum(2, 2 * np.ceil(heights / np.minimum(spacings, step) / 2)).astype(int)
-    ys = [height * np.linspace(0.0, 1.0, n + 1) for height, n in zip(heights, cells)]
-    points = np.column_stack([np.repeat(xs, cells + 1), np.concatenate(ys)])
+    ys = _samples(heights, cells)
+    valid = np.arange(ys.shape[1]) <= cells[:, None]
+    points = np.column_stack([np.repeat(xs, cells + 1), ys[valid]])
     values, _ = PointValues([u]).evaluate(points, outside="extend")
-    along = np.split(values[:, 0], np.cumsum(cells + 1)[:-1])
-    samples = [_section(y, a, axisymmetric) for y, a in zip(ys, along)]
-    first = _level(start[1], ys[0], *samples[0])
-    found = np.empty(len(xs))
-    for i, (cumulative, integrand) in enumerate(samples):
-        total = cumulative[-1]
-        if total >= first:
-            found[i] = _root(first, ys[i], cumulative, integrand)
-        else:  # beyond the top, u_x as at the top
-            rest = (first - total) / along[i][-1]
-            found[i] = (math.sqrt(heights[i] ** 2 + 2 * rest) if axisymmetric
-                        else heights[i] + rest)
+    along = np.zeros_like(ys)
+    along[valid] = values[:, 0]
+    cumulative, integrand = _sections(ys, along, cells, axisymmetric)
+    first = _level(start[1], ys[0, :cells[0] + 1], cumulative[0, :cells[0] + 1],
+                   integrand[0, :cells[0] + 1])
+    rows = np.arange(len(xs))
+    total, at_top = cumulative[rows, cells], along[rows, cells]
+    inside = total >= first
+    found = _roots(first, ys, np.where(valid, cumulative, np.inf), integrand, cells)
+    rest = (first - total[~inside]) / at_top[~inside]  # beyond the top, u_x as at the top
+    found[~inside] = (np.sqrt(heights[~inside] ** 2 + 2 * rest) if axisymmetric
+                      else heights[~inside] + rest)
     found[0] = start[1]
     on_wall = None
     if wall is not None:
@@ -125,16 +126,27 @@ def _stations(start: float, end: float, step: float, grading: float
     return xs, np.maximum(np.append(gaps, gaps[-1]), np.insert(gaps, 0, gaps[0]))
 
 
-def _section(ys: np.ndarray, along: np.ndarray, axisymmetric: bool
-             ) -> tuple[np.ndarray, np.ndarray]:
-    """F and its derivative u_x w at the equally spaced samples ys of one station: F at the even
-    samples by Simpson's rule from the axis, at the odd ones by the trapezoid rule."""
+def _samples(heights: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Each station's ``cells + 1`` equally spaced samples from the axis to its height (as
+    np.linspace), one station a row, the rows padded with zeros to the longest."""
+    index = np.arange(int(cells.max()) + 1)
+    fractions = np.where(index <= cells[:, None], index * (1.0 / cells[:, None]), 0.0)
+    fractions[np.arange(len(cells)), cells] = 1.0
+    return heights[:, None] * fractions
+
+
+def _sections(ys: np.ndarray, along: np.ndarray, cells: np.ndarray, axisymmetric: bool
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """F and its derivative u_x w at the stations' samples (_samples' rows, ``cells`` intervals
+    each): F at the even samples by Simpson's rule from the axis, at the odd ones by the trapezoid
+    rule. Past a row's last sample the values are not used."""
     integrand = along * (ys if axisymmetric else 1.0)
-    spacing = ys[1] - ys[0]
-    pairs = (integrand[:-2:2] + 4 * integrand[1:-1:2] + integrand[2::2]) / 3
+    spacing = ys[:, 1:2] - ys[:, 0:1]
+    pairs = (integrand[:, :-2:2] + 4 * integrand[:, 1:-1:2] + integrand[:, 2::2]) / 3
     cumulative = np.zeros_like(integrand)
-    cumulative[2::2] = np.cumsum(pairs) * spacing
-    cumulative[1::2] = cumulative[:-1:2] + 0.5 * spacing * (integrand[:-1:2] + integrand[1::2])
+    cumulative[:, 2::2] = np.cumsum(pairs, axis=1) * spacing
+    trapezoids = 0.5 * spacing * (integrand[:, :-1:2] + integrand[:, 1::2])
+    cumulative[:, 1::2] = cumulative[:, :-1:2] + trapezoids
     return cumulative, integrand
 
 
@@ -156,18 +168,23 @@ def _level(y: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> floa
     return _hermite((y - ys[j]) / h, h, flux[j], flux[j + 1], rate[j], rate[j + 1])[0]
 
 
-def _root(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray) -> float:
-    """The y where F = level, F increasing, from the samples of F and of its derivative f at ys:
-    Newton's method on Hermite's cubic in the bracketing interval, from the linear guess."""
-    j = min(max(int(np.searchsorted(flux, level)) - 1, 0), len(ys) - 2)
-    h, low, high = ys[j + 1] - ys[j], flux[j], flux[j + 1]
-    t = (level - low) / (high - low) if high > low else 0.5
+def _roots(level: float, ys: np.ndarray, flux: np.ndarray, rate: np.ndarray, cells: np.ndarray
+           ) -> np.ndarray:
+    """Per station (a row of the samples ys, ``cells`` intervals) the y where F = level, F
+    increasing, from the samples of F (padded with inf) and of its derivative f: Newton's method on
+    Hermite's cubic in the bracketing interval, from the linear guess."""
+    rows = np.arange(len(ys))
+    j = np.minimum(np.maximum(np.sum(flux < level, axis=1) - 1, 0), cells - 1)
+    h, low, high = ys[rows, j + 1] - ys[rows, j], flux[rows, j], flux[rows, j + 1]
+    d0, d1 = rate[rows, j], rate[rows, j + 1]
+    t = np.where(high > low, (level - low) / np.where(high > low, high - low, 1.0), 0.5)
+    going = np.ones(len(ys), dtype=bool)
     for _ in range(8):
-        value, slope = _hermite(t, h, low, high, rate[j], rate[j + 1])
-        if slope <= 0:
-            break
-        t = min(max(t - (value - level) / (slope * h), 0.0), 1.0)
-    return ys[j] + t * h
+        value, slope = _hermite(t, h, low, high, d0, d1)
+        going &= slope > 0
+        t = np.where(going, np.clip(t - (value - level) / np.where(going, slope * h, 1.0), 0.0,
+                                    1.0), t)
+    return ys[rows, j] + t * h
 
 
 def updated_stock(problem: FlowProblem, shape: FreeShape
