@@ -5,6 +5,7 @@ by config/mesh_file.py.
 """
 from __future__ import annotations
 
+import ctypes
 import os
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -253,8 +254,22 @@ def _follow(surface: np.ndarray) -> None:
     x = coords[inside, 0]
     line = y0 + (x - x0) / (x1 - x0) * (y1 - y0)
     scale = np.interp(x, surface[:, 0], surface[:, 1]) / line
-    for tag, point, factor in zip(tags[inside], coords[inside], scale):
-        gmsh.model.mesh.setNode(int(tag), [point[0], point[1] * factor, 0.0], [])
+    moved = np.column_stack([x, coords[inside, 1] * scale, np.zeros(len(x))])
+    _set_nodes(tags[inside], moved)
+
+
+def _set_nodes(tags: np.ndarray, coords: np.ndarray) -> None:
+    """gmsh.model.mesh.setNode for each node (tags, coords (N, 3)): gmsh's C function called with
+    one buffer (the Python wrapper converts two lists a node: 20 ms for Example 2's 5k nodes, 4 ms
+    this way)."""
+    set_node = gmsh.lib.gmshModelMeshSetNode
+    point, nothing, error = (ctypes.c_double * 3)(), (ctypes.c_double * 1)(), ctypes.c_int()
+    for tag, (x, y, z) in zip(tags.tolist(), coords.tolist()):
+        point[0], point[1], point[2] = x, y, z
+        set_node(ctypes.c_size_t(tag), point, ctypes.c_size_t(3), nothing, ctypes.c_size_t(0),
+                 ctypes.byref(error))
+        if error.value:
+            raise RuntimeError(f"gmsh could not move node {tag}: {gmsh.logger.getLastError()}")
 
 
 def mesh_model(dim: int, degree: int) -> None:
