@@ -67,7 +67,8 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],
-                        **shape_scalars(scene, shape), "surface_move": move, "draft": drafted()})
+                        **shape_scalars(scene, shape), "surface_move": move,
+                        "stock_miss": new.stock_miss / h1, "draft": drafted()})
         if comm.rank == 0:
             log.info("free surface after %d updates: crossing %.3g %%, the next update moves it "
                      "%.3g of the exit half-size", moved, 100 * summary["free_surface_crossing"],

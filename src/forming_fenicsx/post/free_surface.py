@@ -64,7 +64,7 @@ START_SNAP = 0.05
 
 def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
                  start: tuple[float, float], end_x: float, step: float, axisymmetric: bool,
-                 wall: DieProfile | None = None, grading: float = 1.0
+                 wall: DieProfile | None = None, grading: float = 1.0, toward_end: bool = False
                  ) -> tuple[np.ndarray, float | None]:
     """The surface y(x) under which the flux of u equals the flux at ``start``'s section,
     F(x, y) = int_0^y u_x w dy' = F(x0, y0) (w = y' axisymmetric, 1 in plane strain): the
@@ -75,7 +75,7 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     by discretisation.corner_grading), and so are the first stations and their samples
     (_stations). With ``wall``, a point past the die wall is put back onto it.
     Returns the points (N, 2) and the last x put on the wall (None if none was). Collective."""
-    xs, spacings = _stations(start[0], end_x, step, grading)
+    xs, spacings = _stations(start[0], end_x, step, grading, toward_end)
     heights = np.maximum(top(xs), start[1])
     # per station an even number of equal intervals (Simpson) no longer than its spacing
     cells = np.maximum(2, 2 * np.ceil(heights / np.minimum(spacings, step) / 2)).astype(int)
@@ -106,11 +106,14 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     return np.column_stack([xs, found]), on_wall
 
 
-def _stations(start: float, end: float, step: float, grading: float
+def _stations(start: float, end: float, step: float, grading: float, toward_end: bool = False
               ) -> tuple[np.ndarray, np.ndarray]:
-    """Stations from ``start`` to ``end`` about ``step`` apart, the first ``step / grading`` apart
-    and growing by GROWTH a station to ``step`` (uniform for ``grading`` 1); and the spacing at
-    each (the larger of the intervals it bounds)."""
+    """Stations from ``start`` to ``end`` about ``step`` apart, the first (the last
+    ``toward_end``) ``step / grading`` apart and growing by GROWTH a station to ``step`` (uniform
+    for ``grading`` 1); and the spacing at each (the larger of the intervals it bounds)."""
+    if toward_end:
+        xs, spacings = _stations(-end, -start, step, grading)
+        return -xs[::-1], spacings[::-1]
     count = max(1, math.ceil((end - start) / step))
     if grading <= 1.0:
         xs = np.linspace(start, end, count + 1)
@@ -199,11 +202,14 @@ def updated_stock(problem: FlowProblem, shape: FreeShape
     g, size = scene.geometry, scene.discretisation.mesh_size
     die, h0, start = g.profile(), 0.5 * g.entry_thickness, shape.wall.start[0]
     line, _ = flux_surface(problem.u, shape.height, (0.0, h0), start, size / STEPS_PER_CELL,
-                           g.axisymmetric)
+                           g.axisymmetric, grading=scene.discretisation.corner_grading,
+                           toward_end=True)
     x, y = line[:, 0], np.minimum(line[:, 1], h0)  # a bulge above the stock is kept as drawn
     wall = np.array([wall_height(die, xi) for xi in x])
     gap = wall[-1] - y[-1]
-    slope = (y[-1] - y[-2]) / (x[-1] - x[-2])  # the streamline's at the contact start
+    back = x[-1] - size / STEPS_PER_CELL  # the streamline's slope at the contact start, over a
+    # station's nominal spacing
+    slope = (y[-1] - np.interp(back, x, y)) / (x[-1] - back)
     if gap > 0:  # under the wall by the flux that crossed the stock's surface: continued at its
         # slope, the streamline meets the wall where the gap closes
         closing = slope - _wall_slope(die, start, size)
