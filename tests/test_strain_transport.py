@@ -377,3 +377,24 @@ def report() -> None:
 
 if __name__ == "__main__":
     report()
+
+
+@pytest.mark.parametrize("tangent_from", [0.0, 0.01])
+def test_a_start_near_the_answer_takes_the_strain_of_its_velocity(tangent_from):
+    """start_at(u) (a restart, a free surface's update): eps is the transport of u at once, the
+    first freeze at the same u changes nothing (to 1e-12), and Newton's step (tangent_from > 0)
+    carries the strain's derivative from the start; the gain stays measured from the inflow
+    strain. The secant methods' freezes stay relaxed."""
+    case = extension_case("plane_strain", 4, 1)
+    field = StrainField(case.u, case.coordinates, case.inflow, 1, 4, "supg",
+                        tangent_from=tangent_from)
+    inflow = field.eps.x.array.copy()
+    field.start_at(case.u)
+    settled = field.eps.x.array.copy()
+    assert np.abs(settled - inflow).max() > 0.1
+    assert field.in_tangent == (tangent_from > 0)
+    assert np.allclose(field._start.x.array, inflow, rtol=0, atol=1e-14)
+    field.freeze(case.u)
+    assert np.abs(field.eps.x.array - settled).max() < 1e-12
+    assert field.change(case.u) < 1e-12
+    field.destroy()

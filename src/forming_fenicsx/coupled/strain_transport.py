@@ -163,6 +163,14 @@ class StrainField:
         self.eps.x.array[:] = self.solve(u).x.array
         self.eps.x.scatter_forward()
 
+    def start_at(self, u: dolfinx.fem.Function) -> None:
+        """eps <- eps(u) (the strain is a function of the velocity alone), and for Newton the
+        strain's derivative in the step from the first: the relaxed freezes that lead a cold start
+        there took a free-surface update's warm start 12 steps (docs/free_surface.md)."""
+        self._change_of_gain(u)  # the gain's reference, the inflow strain, kept first
+        self.settle(u)
+        self.in_tangent = self._tangent_from > 0.0
+
     def snapshot(self) -> object:
         return self.eps.x.array.copy(), self.in_tangent, self._relaxed_freezes
 

@@ -232,6 +232,10 @@ class TemperatureField:
                                       self._mixing.damping)
         self._cached.forget()
 
+    def start_at(self, u: dolfinx.fem.Function) -> None:
+        """Nothing: T(u) needs the temperature the start came with, which a start from another
+        mesh's velocity does not carry; T starts at the inflow temperature as for a cold start."""
+
     def settle(self, u: dolfinx.fem.Function) -> None:
         """T <- T(u), the solution at u itself: a one-way computation (freeze moves T
         ``relaxation`` of the way)."""

@@ -59,6 +59,10 @@ class EntrySpeed:
     def settle(self, u: dolfinx.fem.Function) -> None:
         self.stiffness.value, self.released.value = 0.0, 1.0
 
+    def start_at(self, u: dolfinx.fem.Function) -> None:
+        """Nothing: the hold's schedule is a cold start's (rolling refuses the free-surface
+        update; a --restart holds the entry speed as the first run did)."""
+
     def change(self, u: dolfinx.fem.Function) -> float:
         return 1.0 if self.held else 0.0
 

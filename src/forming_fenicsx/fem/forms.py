@@ -372,6 +372,12 @@ class FlowProblem:
         for coefficient in self.frozen:
             coefficient.freeze(u)
 
+    def start_at(self, u: dolfinx.fem.Function) -> None:
+        """Every frozen coefficient for an iteration started from u, near the answer
+        (frozen.py)."""
+        for coefficient in self.frozen:
+            coefficient.start_at(u)
+
     def frozen_change(self, u: dolfinx.fem.Function) -> float:
         """The largest relative change freezing the coefficients at u would make (0 without any)."""
         return max((coefficient.change(u) for coefficient in self.frozen), default=0.0)

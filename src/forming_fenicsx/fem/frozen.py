@@ -7,7 +7,9 @@ Protocol: ``freeze(u)`` takes the coefficient from the velocity u (a relaxed or 
 for a coupled field); ``settle(u)`` takes it at u itself; ``change(u)`` is the relative change
 freezing at u would make (the outer loop has converged when every change is below delta);
 ``snapshot()`` and ``restore(saved)`` keep and bring back its values (an iteration that restarts
-from an earlier iterate, newton.py's fallback, restores what its coefficients were then).
+from an earlier iterate, newton.py's fallback, restores what its coefficients were then);
+``start_at(u)`` sets it for an iteration started from a velocity near the answer (a restart, the
+last flow of a free-surface update), where a cold start's schedule would only lose solves.
 ``coupled``: a field of its own that the flow law reads (strain, temperature: an iteration
 converges only once it settles), not the friction bound; ``tangent``: Newton's step can carry its
 derivative. The coupled fields live in forming_fenicsx.coupled and join a flow problem through
@@ -37,6 +39,8 @@ class FrozenCoefficient(Protocol):
 
     def restore(self, saved: object) -> None: ...
 
+    def start_at(self, u: dolfinx.fem.Function) -> None: ...
+
 
 class FrozenVelocity:
     """A coefficient that is a function of a frozen velocity ``state`` (u_{0,m} of (3.33) for the
@@ -59,6 +63,9 @@ class FrozenVelocity:
 
     def settle(self, u: dolfinx.fem.Function) -> None:
         self.freeze(u)
+
+    def start_at(self, u: dolfinx.fem.Function) -> None:
+        """Nothing: the iteration freezes the state at its first iterate, whatever the start."""
 
     def snapshot(self) -> object:
         return self.state.x.array.copy()

@@ -211,6 +211,7 @@ class SecantSolver:
             petsc_vec(initial).copy(petsc_vec(problem.u))
             dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
             problem.u.x.scatter_forward()
+            problem.start_at(problem.u)
             return True
         problem.set_uniform_secant(problem.scene.reference_strain_rate)
         if math.isfinite(self._step(result, 0, 0, start)):
