@@ -419,3 +419,27 @@ def test_a_15_degree_wire_settled_to_1e_4_crosses_below_a_thousandth():
     assert table["history"][-1]["stock_miss"] < 1e-4
     die = scene.geometry.profile()
     assert die.start[0] < table["contact_start_x"] < die.start[0] + 0.03
+
+
+def test_a_rejected_update_after_a_draft_reports_the_finished_flow():
+    """Example 2 at mu = 0.4 with the second update's flow failed on purpose: the first update's
+    shape stands, and its draft flow is finished to the scene's rules (a fourth solve on the same
+    shape), so the forces reported balance to solver.force_tolerance."""
+    scene = load_scene(EXAMPLE2, ["free_surface.update=true", "friction.mu=0.4"])
+    calls = []
+
+    def solve(variant, previous, generate):
+        problem, result, summary = solve_scene(variant, previous=previous, generate=generate)
+        calls.append(variant.solver.force_tolerance)
+        if len(calls) == 3:
+            summary = {**summary, "iteration_converged": False, "reason": "a forced failure"}
+        return problem, result, summary
+
+    _, _, summary, shape = solve_free_surface(scene, solve)
+    table = summary["free_surface"]
+    assert calls == [0.0, 0.0, 0.0, scene.solver.force_tolerance]
+    assert table["updates"] == 1 and not table["converged"]
+    assert summary["force_balance_residual"] < scene.solver.force_tolerance
+    assert table["contact_start_x"] == pytest.approx(shape.wall.start[0])
+    assert any("update 2 gave a flow that did not converge (a forced failure)" in warning
+               for warning in summary["warnings"])
