@@ -408,7 +408,8 @@ class NewtonSolver(SecantSolver):
                         failed)
         self.settings = dataclasses.replace(self.settings, method="direct")
         self.problem.restore(self._coupled_start)
-        direct = SecantSolver._iterate(self, self._newton_start)
+        # from an early iterate, with the coefficients it had: not a start near the answer
+        direct = SecantSolver._iterate(self, self._newton_start, near_answer=False)
         direct.history = result.history + direct.history
         direct.linear_solves += result.linear_solves
         direct.force_balance_checks = result.force_balance_checks + direct.force_balance_checks

@@ -203,15 +203,17 @@ class SecantSolver:
         return messages.balance_note(result.force_balance_checks, self.force_tolerance())
 
     def _start(self, initial: dolfinx.fem.Function | None, result: SolveResult,
-               start: float) -> bool:
-        """u_{0,0}: ``initial`` (a restart) or the solution with a uniform modulus; False if that
-        failed."""
+               start: float, near_answer: bool = True) -> bool:
+        """u_{0,0}: ``initial`` (a restart, the last flow of a free surface's update: with
+        ``near_answer`` the frozen coefficients start there too, frozen.py's start_at) or the
+        solution with a uniform modulus; False if that failed."""
         problem = self.problem
         if initial is not None:
             petsc_vec(initial).copy(petsc_vec(problem.u))
             dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
             problem.u.x.scatter_forward()
-            problem.start_at(problem.u)
+            if near_answer:
+                problem.start_at(problem.u)
             return True
         problem.set_uniform_secant(problem.scene.reference_strain_rate)
         if math.isfinite(self._step(result, 0, 0, start)):
@@ -247,13 +249,14 @@ class SecantSolver:
     def timings(self) -> Timings:
         return self.linear.timings
 
-    def _iterate(self, initial: dolfinx.fem.Function | None) -> SolveResult:
-        """The secant-modulus iteration (3.13) or (3.33)."""
+    def _iterate(self, initial: dolfinx.fem.Function | None, near_answer: bool = True
+                 ) -> SolveResult:
+        """The secant-modulus iteration (3.13) or (3.33), from ``initial`` as _start takes it."""
         problem, settings = self.problem, self.settings
         delta, method = settings.tolerance, settings.method
         start = time.perf_counter()
         result = SolveResult(converged=False, reason="")
-        if not self._start(initial, result, start):
+        if not self._start(initial, result, start, near_answer):
             return result
         # the modified method's outer loop over the frozen coefficients (the friction bound, ...)
         outer_limit = settings.max_outer_iterations if (method == "modified" and problem.frozen) \
