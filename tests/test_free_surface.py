@@ -25,7 +25,7 @@ from forming_fenicsx.mesh.free_shape import FreeShape
 from forming_fenicsx.mesh.geometry import gmsh_session, shaped_mesh
 from forming_fenicsx.mesh.quality import folded_cells
 from forming_fenicsx.post.die import die_profile
-from forming_fenicsx.post.free_surface import _stations, flux_surface
+from forming_fenicsx.post.free_surface import SurfaceNotFound, _stations, flux_surface
 from forming_fenicsx.post.sanity import free_surfaces
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
@@ -443,3 +443,41 @@ def test_a_rejected_update_after_a_draft_reports_the_finished_flow():
     assert table["contact_start_x"] == pytest.approx(shape.wall.start[0])
     assert any("update 2 gave a flow that did not converge (a forced failure)" in warning
                for warning in summary["warnings"])
+
+
+def test_a_surface_over_flow_that_runs_back_is_not_found():
+    """u = (1 - 0.75 x y, 0) on [0, 2] x [0, 1]: the flow along the top runs back from x = 4/3 on,
+    and the flux level of (0, 0.9) lies beyond the top there: SurfaceNotFound names where, instead
+    of a surface under the axis (a stainless strip at 25 degrees and mu = 0.15 gave one below
+    y = 0, then 36 folded cells)."""
+    mesh = dolfinx.mesh.create_rectangle(
+        MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([2.0, 1.0])], [16, 8],
+        dolfinx.mesh.CellType.quadrilateral)
+    u = dolfinx.fem.Function(function_space(mesh, "P", 1, (2,)))
+    u.interpolate(lambda p: np.vstack([1 - 0.75 * p[0] * p[1], np.zeros(p.shape[1])]))
+    with pytest.raises(SurfaceNotFound, match=r"runs back at x = 1\.[3-9]"):
+        flux_surface(u, np.ones_like, (0.0, 0.9), 2.0, 0.05, False)
+
+
+def test_an_update_that_cannot_be_made_stops_with_its_reason(monkeypatch):
+    """Example 2 (mu = 0) with the second update's surface not found: the first update's shape
+    and flow stand, the warning says why, and no "did not settle in max_updates" follows."""
+    import forming_fenicsx.app.free_surface as app
+
+    real, calls = app.updated_shape, []
+
+    def updated(problem, shape, end):
+        calls.append(shape)
+        if len(calls) == 2:
+            raise SurfaceNotFound("the flow along the surface stands or runs back at x = 2.9")
+        return real(problem, shape, end)
+
+    monkeypatch.setattr(app, "updated_shape", updated)
+    scene = load_scene(EXAMPLE2, ["free_surface.update=true"])
+    _, _, summary, shape = _solve(scene)
+    table = summary["free_surface"]
+    assert table["updates"] == 1 and not table["converged"] and shape is calls[1]
+    assert [w for w in summary["warnings"] if "free surface" in w] == [
+        "the free surface's update 2 could not be made: the flow along the surface stands or "
+        "runs back at x = 2.9 (a bulge or a dead zone, which the update does not follow); the "
+        "update stopped, and the shape and the forces are those of update 1"]

@@ -27,7 +27,7 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.free_shape import FreeShape, fixed_shape, wall_area
 from forming_fenicsx.mesh.geometry import shaped_mesh
 from forming_fenicsx.mesh.quality import folded_cells
-from forming_fenicsx.post.free_surface import shape_change, updated_shape
+from forming_fenicsx.post.free_surface import SurfaceNotFound, shape_change, updated_shape
 from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
@@ -61,8 +61,18 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         return solve(_warm(scene), problem.u, None if moved == 0 else _mesher(scene, shape, comm))
 
     updates: list[dict[str, Any]] = []
+    stopped = ""  # why the update stopped before the surface settled, if it did
     while summary["iteration_converged"]:
-        new = updated_shape(problem, shape, summary.get("contact_end_x"))  # none: square
+        try:
+            new = updated_shape(problem, shape, summary.get("contact_end_x"))  # none: square
+        except SurfaceNotFound as error:  # this shape stands
+            if drafted():
+                problem, result, summary = finished()
+                solves += summary["linear_solves"]
+            stopped = (f"the free surface's update {moved + 1} could not be made: {error} (a "
+                       "bulge or a dead zone, which the update does not follow); the update "
+                       f"stopped, and the shape and the forces are those of update {moved}")
+            break
         move = max(shape_change(shape, new, scene.geometry.length), new.stock_miss) / h1
         updates.append({"linear_solves": summary["linear_solves"],
                         "wall_time_s": summary["wall_time_s"],
@@ -96,16 +106,17 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
                 solves += summary["linear_solves"]
             why = (f"re-meshed the workpiece with {folded} folded cells (not convex)" if folded
                    else f"gave a flow that did not converge ({failed})")
-            summary["warnings"].append(
-                f"the free surface's update {moved + 1} {why}: the update stopped, and the shape "
-                f"and the forces are those of update {moved}")
+            stopped = (f"the free surface's update {moved + 1} {why}: the update stopped, and "
+                       f"the shape and the forces are those of update {moved}")
             break
     summary["scene"] = scene.to_dict()  # the scene's, not a draft's or a warm start's
     summary["free_surface"] = {
         "converged": converged, "updates": moved, "tolerance": settings.tolerance,
         **shape_scalars(scene, shape), "history": updates, "linear_solves": solves,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX)}
-    if not converged and summary["converged"]:
+    if stopped:
+        summary["warnings"].append(stopped)
+    elif not converged and summary["converged"]:
         summary["warnings"].append(
             f"the free surface did not settle in free_surface.max_updates = "
             f"{settings.max_updates} updates (the last moved it {updates[-1]['surface_move']:.3g} "

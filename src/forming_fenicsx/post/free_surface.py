@@ -62,6 +62,11 @@ MAX_SHIFT = 1.0
 START_SNAP = 0.05
 
 
+class SurfaceNotFound(ValueError):
+    """No streamline from the start passes a station: the flow at the top boundary stands or runs
+    back there (u_x <= 0) while the level lies beyond it."""
+
+
 def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
                  start: tuple[float, float], end_x: float, step: float, axisymmetric: bool,
                  wall: DieProfile | None = None, grading: float = 1.0, toward_end: bool = False
@@ -74,7 +79,9 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     at its value there. ``grading``: the mesh is that much finer at the start (a die corner graded
     by discretisation.corner_grading), and so are the first stations and their samples
     (_stations). With ``wall``, a point past the die wall is put back onto it.
-    Returns the points (N, 2) and the last x put on the wall (None if none was). Collective."""
+    Returns the points (N, 2) and the last x put on the wall (None if none was); raises
+    SurfaceNotFound where the level lies beyond the top and u_x there is not positive (on every
+    rank alike). Collective."""
     xs, spacings = _stations(start[0], end_x, step, grading, toward_end)
     heights = np.maximum(top(xs), start[1])
     # per station an even number of equal intervals (Simpson) no longer than its spacing
@@ -92,6 +99,12 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     total, at_top = cumulative[rows, cells], along[rows, cells]
     inside = total >= first
     found = _roots(first, ys, np.where(valid, cumulative, np.inf), integrand, cells)
+    standing = ~inside & (at_top <= 0.0)
+    if standing.any():
+        i = int(np.argmax(standing))
+        raise SurfaceNotFound(
+            f"the flow along the surface stands or runs back at x = {xs[i]:.6g} (u_x = "
+            f"{at_top[i]:.3g}), and the streamline from x = {start[0]:.6g} would pass over it")
     rest = (first - total[~inside]) / at_top[~inside]  # beyond the top, u_x as at the top
     found[~inside] = (np.sqrt(heights[~inside] ** 2 + 2 * rest) if axisymmetric
                       else heights[~inside] + rest)
