@@ -49,8 +49,18 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     start = time.perf_counter()
     shape = fixed_shape(scene)
     draft = _draft(scene)
-    problem, result, summary = solve(draft, None, None)
-    solves, moved, converged = summary["linear_solves"], 0, False
+    solves, moved, converged = 0, 0, False
+
+    def solved(variant: Scene, previous: dolfinx.fem.Function | None,
+               generate: Callable[[], None] | None
+               ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+        """``solve``, its linear solves counted into the run's."""
+        nonlocal solves
+        outcome = solve(variant, previous, generate)
+        solves += outcome[2]["linear_solves"]
+        return outcome
+
+    problem, result, summary = solved(draft, None, None)
 
     def drafted() -> bool:  # the flow does not meet the scene's own rules
         return draft is not scene and not summary["force_balance_residual"] \
@@ -58,7 +68,8 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
 
     def finished() -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
         """The draft flow solved on to the scene's own rules, on its shape's mesh."""
-        return solve(_warm(scene), problem.u, None if moved == 0 else _mesher(scene, shape, comm))
+        return solved(_warm(scene), problem.u, None if moved == 0 else
+                      _mesher(scene, shape, comm))
 
     updates: list[dict[str, Any]] = []
     stopped = ""  # why the update stopped before the surface settled, if it did
@@ -68,7 +79,6 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         except SurfaceNotFound as error:  # this shape stands
             if drafted():
                 problem, result, summary = finished()
-                solves += summary["linear_solves"]
             stopped = (f"the free surface's update {moved + 1} could not be made: {error} (a "
                        "bulge or a dead zone, which the update does not follow); the update "
                        f"stopped, and the shape and the forces are those of update {moved}")
@@ -87,14 +97,12 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         if (converged or moved == settings.max_updates) and drafted():  # the last shape: its
             # flow finished, and the shape judged again on it
             problem, result, summary = finished()
-            solves += summary["linear_solves"]
             continue
         if converged or moved == settings.max_updates:
             break
         last = problem, result, summary, shape
         shape, moved = new, moved + 1
-        problem, result, summary = solve(_warm(draft), problem.u, _mesher(scene, shape, comm))
-        solves += summary["linear_solves"]
+        problem, result, summary = solved(_warm(draft), problem.u, _mesher(scene, shape, comm))
         folded = folded_cells(problem.mesh)
         failed = "" if summary["iteration_converged"] else summary["reason"]
         if folded or failed:  # the last shape's solve stands: this mesh's cannot be trusted
@@ -103,7 +111,6 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             moved -= 1
             if drafted():
                 problem, result, summary = finished()
-                solves += summary["linear_solves"]
             why = (f"re-meshed the workpiece with {folded} folded cells (not convex)" if folded
                    else f"gave a flow that did not converge ({failed})")
             stopped = (f"the free surface's update {moved + 1} {why}: the update stopped, and "

@@ -167,7 +167,7 @@ class StrainField:
         """eps <- eps(u) (the strain is a function of the velocity alone), and for Newton the
         strain's derivative in the step from the first: the relaxed freezes that lead a cold start
         there took a free-surface update's warm start 12 steps (docs/free_surface.md)."""
-        self._change_of_gain(u)  # the gain's reference, the inflow strain, kept first
+        self._keep_start()  # the gain's reference: the inflow strain, before it is replaced
         self.settle(u)
         self.in_tangent = self._tangent_from > 0.0
 
@@ -187,10 +187,14 @@ class StrainField:
         pre-strained stock ||eps(u)|| is mostly the inflow strain, and a change relative to it
         would switch to the tangent while the velocity still moves by percents
         (docs/hardening.md)."""
+        self._keep_start()
+        return self._relative(u, self._gained)
+
+    def _keep_start(self) -> None:
+        """eps_start, the strain the iteration starts from, kept once (with the gain's norm)."""
         if self._start is None:
             self._start = self.eps.copy()
             self._gained = dolfinx.fem.form((self._candidate - self._start) ** 2 * self._dx)
-        return self._relative(u, self._gained)
 
     def _relative(self, u: dolfinx.fem.Function, reference: dolfinx.fem.Form) -> float:
         """||eps(u) - eps|| over the square root of ``reference`` (collective; 0 when it is 0)."""

@@ -98,13 +98,13 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     rows = np.arange(len(xs))
     total, at_top = cumulative[rows, cells], along[rows, cells]
     inside = total >= first
-    found = _roots(first, ys, np.where(valid, cumulative, np.inf), integrand, cells)
     standing = ~inside & (at_top <= 0.0)
     if standing.any():
         i = int(np.argmax(standing))
         raise SurfaceNotFound(
             f"the flow along the surface stands or runs back at x = {xs[i]:.6g} (u_x = "
             f"{at_top[i]:.3g}), and the streamline from x = {start[0]:.6g} would pass over it")
+    found = _roots(first, ys, np.where(valid, cumulative, np.inf), integrand, cells)
     rest = (first - total[~inside]) / at_top[~inside]  # beyond the top, u_x as at the top
     found[~inside] = (np.sqrt(heights[~inside] ** 2 + 2 * rest) if axisymmetric
                       else heights[~inside] + rest)
