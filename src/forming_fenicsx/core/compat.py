@@ -134,6 +134,24 @@ def cell_dofs(dofmap) -> np.ndarray:
     return np.asarray(dofmap.list)
 
 
+def basix_element(of):
+    """The basix element of a function space (``of``), or None where its cell dofs need
+    transformations; or of a mesh's coordinate map (Lagrange, to degree 2, where the variants
+    agree), or None above."""
+    import basix
+
+    if isinstance(of, dolfinx.mesh.Mesh):
+        degree = of.geometry.cmap.degree
+        if degree > 2:
+            return None
+        cell = getattr(basix.CellType, of.topology.cell_type.name)
+        return basix.create_element(basix.ElementFamily.P, cell, degree,
+                                    basix.LagrangeVariant.gll_warped)
+    if of.element.needs_dof_transformations:
+        return None
+    return of.element.basix_element
+
+
 def set_at_quadrature_points(function: dolfinx.fem.Function,
                              expression: dolfinx.fem.Expression) -> None:
     """function <- expression evaluated at the Gauss points of every local cell (then ghosts

@@ -10,10 +10,9 @@ method on Hermite's cubic (F and its derivative u_x w are known at the samples).
 ends at a corner toward which the mesh is graded, the first sections and their samples are as
 much closer (the corner's velocity turns within its small elements: sampled at the nominal
 spacing, the level there missed the flux and the product came out up to 1.3 % too thin,
-docs/free_surface.md). The velocity is
-evaluated by points.py. The slope dy/dx = v_y/v_x is not integrated: at a sticking wall's
-corner, where the contact may end, the velocity vanishes and its direction is noise
-(docs/free_surface.md).
+docs/free_surface.md). The velocity is evaluated through the mesh's columns (columns.py). The
+slope dy/dx = v_y/v_x is not integrated: at a sticking wall's corner, where the contact may end,
+the velocity vanishes and its direction is noise (docs/free_surface.md).
 
 The product's surface starts where the contact with the die ends: the last node of the die with
 positive contact pressure (a contact whose pressure would be tensile has released, and the
@@ -45,7 +44,7 @@ import numpy as np
 from forming_fenicsx.config.die_profile import DieProfile
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.free_shape import FreeShape, clipped, wall_height
-from forming_fenicsx.mesh.points import PointValues
+from forming_fenicsx.mesh.columns import ColumnValues
 
 STEPS_PER_CELL = 4
 # the growth of the stations' spacing from a graded corner (flux_surface)
@@ -89,7 +88,7 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     ys = _samples(heights, cells)
     valid = np.arange(ys.shape[1]) <= cells[:, None]
     points = np.column_stack([np.repeat(xs, cells + 1), ys[valid]])
-    values, _ = PointValues([u]).evaluate(points, outside="extend")
+    values, _ = ColumnValues(u).evaluate(points, outside="column")
     along = np.zeros_like(ys)
     along[valid] = values[:, 0]
     cumulative, integrand = _sections(ys, along, cells, axisymmetric)
