@@ -18,7 +18,6 @@ import logging
 import time
 from typing import Any, Callable
 
-import dolfinx.fem
 import numpy as np
 from mpi4py import MPI
 
@@ -32,14 +31,15 @@ from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
 
-Solve = Callable[[Scene, "dolfinx.fem.Function | None", "Callable[[], None] | None"],
+Solve = Callable[[Scene, "FlowProblem | None", "Callable[[], None] | None"],
                  tuple[FlowProblem, SolveResult, dict[str, Any]]]
 
 
 def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
                        ) -> tuple[FlowProblem, SolveResult, dict[str, Any], FreeShape]:
     """Alternate ``solve(variant, previous, generate)`` (run.solve_scene of the scene ``variant``
-    on the mesh ``generate`` makes, started from ``previous``) with the surface update (module
+    on the mesh ``generate`` makes, started from the solved problem ``previous``: its velocity and
+    contact multiplier) with the surface update (module
     docstring). A shape that still moves is updated from a draft flow (_draft); the flow the run
     reports, on the last shape, meets the scene's own rules. Returns the last solve's problem,
     iteration and summary, the summary with a ``free_surface`` table, and the shape the last solve
@@ -51,7 +51,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     draft = _draft(scene)
     solves, moved, converged = 0, 0, False
 
-    def solved(variant: Scene, previous: dolfinx.fem.Function | None,
+    def solved(variant: Scene, previous: FlowProblem | None,
                generate: Callable[[], None] | None
                ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
         """``solve``, its linear solves counted into the run's."""
@@ -68,7 +68,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
 
     def finished() -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
         """The draft flow solved on to the scene's own rules, on its shape's mesh."""
-        return solved(_warm(scene), problem.u, None if moved == 0 else
+        return solved(_warm(scene), problem, None if moved == 0 else
                       _mesher(scene, shape, comm))
 
     updates: list[dict[str, Any]] = []
@@ -102,7 +102,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             break
         last = problem, result, summary, shape
         shape, moved = new, moved + 1
-        problem, result, summary = solved(_warm(draft), problem.u, _mesher(scene, shape, comm))
+        problem, result, summary = solved(_warm(draft), problem, _mesher(scene, shape, comm))
         folded = folded_cells(problem.mesh)
         failed = "" if summary["iteration_converged"] else summary["reason"]
         if folded or failed:  # the last shape's solve stands: this mesh's cannot be trusted

@@ -47,14 +47,16 @@ log = logging.getLogger(__name__)
 
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
                 comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None,
-                restart: Path | None = None, previous: dolfinx.fem.Function | None = None,
+                restart: Path | None = None,
+                previous: dolfinx.fem.Function | FlowProblem | None = None,
                 generate: Callable[[], None] | None = None, quiet: bool = False
                 ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
     folder whose velocity.npz (same mesh) starts the iteration, ``previous`` a velocity on another
-    mesh of the workpiece that starts it interpolated (transfer.py); ``generate`` meshes the
+    mesh of the workpiece that starts it interpolated (transfer.py), or a problem solved on one,
+    whose contact multiplier starts it too (FlowProblem.carry_from); ``generate`` meshes the
     workpiece instead of the scene's blocks (an adapted mesh, mesh/adapted.py); ``quiet``: the
     summary's warnings are not logged (the free surface's intermediate flows: it logs its last
     one's). Timed from when every rank has entered (a rank still starting its interpreter is not
@@ -66,6 +68,10 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
     if restart is not None:
         initial = problem.u.copy()
         load_velocity(Path(restart) / "velocity.npz", initial)
+    elif isinstance(previous, FlowProblem):
+        initial = problem.u.copy()
+        transfer(previous.u, initial)
+        problem.carry_from(previous)
     elif previous is not None:
         initial = problem.u.copy()
         transfer(previous, initial)

@@ -3,9 +3,11 @@ terms it enters): Uzawa's update lambda <- (lambda + u_N/d_N)^+ once the iterate
 from __future__ import annotations
 
 import dolfinx.fem
+import numpy as np
 
 from forming_fenicsx.core.compat import function_space, petsc_vec
 from forming_fenicsx.fem.projection import LumpedProjector
+from forming_fenicsx.mesh.transfer import transfer
 from forming_fenicsx.physics.contact import contact_pressure
 
 
@@ -45,6 +47,16 @@ class ContactMultiplier:
         else:
             self.updates += 1
         return change
+
+    def start_from(self, source: dolfinx.fem.Function) -> None:
+        """lambda of a solved problem on another mesh of the workpiece (a warm start): the
+        source multiplier at this one's nodes of Gamma3 (transfer.py), zero elsewhere as after an
+        update."""
+        transfer(source, self.value)
+        owned = self.value.function_space.dofmap.index_map.size_local
+        self.value.x.array[:owned] *= self._projector.weights_mask()
+        self.value.x.array[:owned] = np.maximum(self.value.x.array[:owned], 0.0)
+        self.value.x.scatter_forward()
 
     def settled(self, increment: float, delta: float) -> bool:
         """Called after every iterate (increment: its relative change, taken in full): updates

@@ -372,6 +372,13 @@ class FlowProblem:
         for coefficient in self.frozen:
             coefficient.freeze(u)
 
+    def carry_from(self, previous: FlowProblem) -> None:
+        """The augmented contact's multiplier of a solved problem on another mesh of the workpiece
+        (ContactMultiplier.start_from): without it a warm start's first iterate has the penalty's
+        contact pressure alone, and no friction bound (Coulomb's reads lambda)."""
+        if self.multiplier is not None and previous.multiplier is not None:
+            self.multiplier.start_from(previous.multiplier.value)
+
     def start_at(self, u: dolfinx.fem.Function) -> None:
         """Every frozen coefficient for an iteration started from u, near the answer
         (frozen.py)."""

@@ -44,6 +44,10 @@ class LumpedProjector:
         weights[:] = np.divide(1.0, weights, out=np.zeros_like(weights), where=weights != 0)
         self._rhs = self._weights.duplicate()
 
+    def weights_mask(self) -> np.ndarray:
+        """1 at the owned values the projection sets (those of the measure's support), else 0."""
+        return (self._weights.getArray() != 0).astype(float)
+
     def project(self) -> dolfinx.fem.Function:
         """Recompute the target from the current values of the expression's coefficients."""
         with self._rhs.localForm() as local:
