@@ -17,7 +17,7 @@ import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.app.free_surface import solve_free_surface
-from forming_fenicsx.app.run import run_scene, solve_scene
+from forming_fenicsx.app.run import completed_summary, run_scene, solve_scene
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.errors import SceneError
@@ -73,9 +73,29 @@ def _rod(land: float, update: bool = True):
                             f"free_surface.update={'true' if update else 'false'}"])
 
 
-def _solve(scene):
+def _solve(scene, lite: bool = True):
+    """The update as `forming run` makes it: the flows that move on with lite summaries, the last
+    one's completed (run.completed_summary); ``lite`` False: every flow post-processed in full."""
     return solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
-        variant, previous=previous, generate=generate))
+        variant, previous=previous, generate=generate, quiet=True, lite=lite),
+        complete=lambda *solved: completed_summary(*solved, scene, MPI.COMM_WORLD))
+
+
+def _numbers(summary: dict, prefix: str = "") -> dict:
+    """A summary's entries by their dotted path, its wall times left out."""
+    found = {}
+    for key, value in summary.items():
+        path = f"{prefix}.{key}" if prefix else key
+        if "wall_time" in key or "time_split" in key:
+            continue
+        if isinstance(value, dict):
+            found.update(_numbers(value, path))
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            for index, item in enumerate(value):
+                found.update(_numbers(item, f"{path}.{index}"))
+        else:
+            found[path] = value
+    return found
 
 
 def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline():
@@ -101,6 +121,19 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
     assert shape.downstream[:, 1].min() > shape.exit_height - 0.01
     # the drawing stress's section and the product's profile read the product's own size
     assert 2 * shape.exit_height == pytest.approx(table["exit_diameter"])
+
+
+def test_lite_summaries_completed_are_the_full_ones():
+    """Example 2 (mu = 0, three updates): the flows of shapes that move on keep only the numbers
+    the update reads (run.solve_scene(lite=True)), and the last one's summary is completed. The
+    run's summary equals the one with every flow post-processed in full, every entry and its order
+    but the wall times (0.40 s against 0.45 s measured)."""
+    scene = load_scene(EXAMPLE2, ["free_surface.update=true", "output.fields=false",
+                                  "output.figures=false"])
+    lite, full = _solve(scene)[2], _solve(scene, lite=False)[2]
+    assert list(_numbers(lite)) == list(_numbers(full))
+    assert _numbers(lite) == _numbers(full)
+    assert lite["free_surface"]["updates"] == 3 and "lite_summary" not in lite
 
 
 def test_a_warm_start_carries_the_contact_multiplier():

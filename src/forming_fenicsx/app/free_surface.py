@@ -33,9 +33,11 @@ log = logging.getLogger(__name__)
 
 Solve = Callable[[Scene, "FlowProblem | None", "Callable[[], None] | None"],
                  tuple[FlowProblem, SolveResult, dict[str, Any]]]
+Complete = Callable[[FlowProblem, SolveResult, dict[str, Any]], dict[str, Any]]
 
 
-def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD
+def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WORLD,
+                       complete: Complete | None = None
                        ) -> tuple[FlowProblem, SolveResult, dict[str, Any], FreeShape]:
     """Alternate ``solve(variant, previous, generate)`` (run.solve_scene of the scene ``variant``
     on the mesh ``generate`` makes, started from the solved problem ``previous``: its velocity and
@@ -43,7 +45,9 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
     docstring). A shape that still moves is updated from a draft flow (_draft); the flow the run
     reports, on the last shape, meets the scene's own rules. Returns the last solve's problem,
     iteration and summary, the summary with a ``free_surface`` table, and the shape the last solve
-    had."""
+    had. ``complete(problem, result, summary)``: the last solve's summary made whole, where
+    ``solve`` gives only what the update reads (run.solve_scene's lite summaries: the flows of
+    shapes that move on are not post-processed in full)."""
     settings = scene.free_surface
     h1 = 0.5 * scene.geometry.exit_thickness
     start = time.perf_counter()
@@ -116,6 +120,8 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             stopped = (f"the free surface's update {moved + 1} {why}: the update stopped, and "
                        f"the shape and the forces are those of update {moved}")
             break
+    if complete is not None:
+        summary = complete(problem, result, summary)
     summary["scene"] = scene.to_dict()  # the scene's, not a draft's or a warm start's
     summary["free_surface"] = {
         "converged": converged, "updates": moved, "tolerance": settings.tolerance,

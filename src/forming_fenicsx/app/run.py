@@ -36,21 +36,22 @@ from forming_fenicsx.post.exit_profiles import exit_profile, exit_strain_profile
 from forming_fenicsx.post.forces import force_balance
 from forming_fenicsx.post.output_fields import output_fields
 from forming_fenicsx.post.sanity import check_run
-from forming_fenicsx.post.summary import scalars
+from forming_fenicsx.post.summary import scalars, update_scalars
 from forming_fenicsx.post.views3d import die_faces, exit_section_values, symmetry_planes
 from forming_fenicsx.solvers.accuracy import solve_to_accuracy
 from forming_fenicsx.solvers.choice import solver_for
 from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
+LITE = "lite_summary"  # a lite summary's mark (solve_scene(lite=True)), gone once completed
 
 
 def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
                 comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None,
                 restart: Path | None = None,
                 previous: dolfinx.fem.Function | FlowProblem | None = None,
-                generate: Callable[[], None] | None = None, quiet: bool = False
-                ) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
+                generate: Callable[[], None] | None = None, quiet: bool = False,
+                lite: bool = False) -> tuple[FlowProblem, SolveResult, dict[str, Any]]:
     """Mesh, solve and post-process a scene; returns the problem, the iteration and the summary.
 
     ``stop`` is polled after every linear solve (see SecantSolver); ``restart`` is a previous run's
@@ -59,8 +60,9 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
     whose contact multiplier starts it too (FlowProblem.carry_from); ``generate`` meshes the
     workpiece instead of the scene's blocks (an adapted mesh, mesh/adapted.py); ``quiet``: the
     summary's warnings are not logged (the free surface's intermediate flows: it logs its last
-    one's). Timed from when every rank has entered (a rank still starting its interpreter is not
-    the run's time)."""
+    one's); ``lite``: the summary has only the numbers the free surface's update reads
+    (summary.update_scalars) and no checks, until completed_summary. Timed from when every rank
+    has entered (a rank still starting its interpreter is not the run's time)."""
     comm.barrier()
     start = time.perf_counter()
     problem = coupled_problem(scene, build_mesh(scene, comm, generate))
@@ -82,7 +84,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
     solver.destroy()
     post = time.perf_counter()
     problem.update_state(problem.u, frozen_too=True)
-    numbers = scalars(problem)
+    numbers = update_scalars(problem) if lite else scalars(problem)
     post = time.perf_counter() - post
     body = {
         "scene": scene.to_dict(),
@@ -102,7 +104,30 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
         "wall_time_s": comm.allreduce(time.perf_counter() - start, op=MPI.MAX),
         "time_split_s": time_split(comm, setup, result, post),
     }
+    if lite:
+        return problem, result, {LITE: True, "warnings": [], "failed_checks": [],
+                                 "converged": result.converged, "reason": result.reason,
+                                 "iteration_converged": result.converged, **body}
     return problem, result, summarise(body, result, scene, comm, quiet)
+
+
+def completed_summary(problem: FlowProblem, result: SolveResult, summary: dict[str, Any],
+                      scene: Scene, comm: MPI.Comm) -> dict[str, Any]:
+    """A lite summary (solve_scene(lite=True)) made whole: every number of scalars and the
+    sanity checks against ``scene``, for the problem's flow (the free surface's last); the time
+    it takes is the post-processing's and the run's. Warnings are not logged. Collective."""
+    if not summary.get(LITE):
+        return summary
+    start = time.perf_counter()
+    numbers = scalars(problem)
+    spent = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+    keys = list(summary)
+    lite_numbers = keys.index("restarted_from") + 1
+    head = {key: summary[key] for key in keys[keys.index("scene"):lite_numbers]}
+    split = summary["time_split_s"]
+    body = {**head, **numbers, "wall_time_s": summary["wall_time_s"] + spent,
+            "time_split_s": {**split, "postprocess": split["postprocess"] + spent}}
+    return summarise(body, result, scene, comm, quiet=True)
 
 
 def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm,
@@ -201,7 +226,8 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         problem, result, summary, shape = solve_free_surface(
             scene, lambda variant, previous, generate: solve_scene(
                 variant, petsc_options, comm, stop, previous=previous, generate=generate,
-                quiet=True), comm)
+                quiet=True, lite=True), comm,
+            lambda *solved: completed_summary(*solved, scene, comm))
         if comm.rank == 0:
             log_warnings(summary["warnings"])
     elif scene.accuracy.target is None:

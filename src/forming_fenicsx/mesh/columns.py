@@ -54,6 +54,7 @@ class ColumnValues:
                   and self._element is not None and self._element.dim == dofs.shape[1])
         self._cells = np.zeros(0, dtype=np.int32)
         self._along = np.zeros(0, dtype=int)
+        self._usable = usable  # the same on every rank
         if not usable:
             return
         self._dofs = dofs
@@ -90,7 +91,7 @@ class ColumnValues:
         the polynomial of the top cell at its x extended, any other point outside as "extend"."""
         local = np.zeros((len(points), self.width))
         count = np.zeros(len(points))
-        if len(self._cells):
+        if self._usable:  # on every rank: "column" is collective
             hit, cells, reference = self._locate(np.asarray(points, dtype=float),
                                                  outside == "column")
             if len(hit):
@@ -127,12 +128,16 @@ class ColumnValues:
         low, high = np.minimum(bottom, top), np.maximum(bottom, top)
         # the pairs by station, then upward; a point's cell is the last pair of its station below
         # it (a key that orders stations first: heights span less than `span`)
-        base = self._nodes[:, :, 1].min()
-        span = 2.0 * (np.ptp(self._nodes[:, :, 1]) + 1.0)
+        heights = self._nodes[:, :, 1]
+        base = heights.min(initial=0.0)
+        span = 2.0 * (heights.max(initial=0.0) - base + 1.0)
         order = np.lexsort((low, pair_station))
         keys = pair_station[order] * span + (low[order] - base)
         wanted = station_of * span + (points[:, 1] - base)
         index = np.searchsorted(keys, wanted, "right") - 1
+        if not len(order):  # no cell of this rank spans a point's x
+            order, index = np.zeros(1, dtype=int), np.full(len(points), -1)
+            pair_station, low, high = np.full(1, -1), np.zeros(1), np.zeros(1)
         candidate = order[np.clip(index, 0, None)]
         tolerance = VERTICAL * (high - low)[candidate]
         held = ((index >= 0) & (pair_station[candidate] == station_of)
@@ -156,7 +161,8 @@ class ColumnValues:
         (the highest of the column cells there on any rank, no other cell spanning that x).
         Collective."""
         top = np.full(len(stations), -np.inf)
-        np.maximum.at(top, pair_station, high)
+        spanning = pair_station >= 0  # none where no cell of this rank spans a point's x
+        np.maximum.at(top, pair_station[spanning], high[spanning])
         top = np.max(self._comm.allgather(top), axis=0)
         others = np.setdiff1d(np.arange(len(self._nodes)), self._cells)
         blocked = np.zeros(len(stations), dtype=int)

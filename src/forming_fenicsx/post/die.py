@@ -118,15 +118,21 @@ def die_scalars_of(problem: FlowProblem, profile: dict[str, np.ndarray] | None
     cone = 1.0 if g.mesh_file else ufl.conditional(
         ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     zone = _zone(problem, die_pressure(problem), cone)
+    return {"mean_die_pressure": zone["mean_die_pressure"],
+            "contact_length": zone["contact_length"],
+            "contact_end_x": contact_end_x(problem, profile),
+            "die_contact_fraction": zone["die_contact_fraction"]}
+
+
+def contact_end_x(problem: FlowProblem, profile: dict[str, np.ndarray] | None) -> float:
+    """The x of the last node of Gamma3 with positive contact pressure in ``profile``
+    (die_profile's, on rank 0; None on the other ranks), on every rank. Collective."""
     end = None
     if profile is not None:
         pressure = profile["contact_pressure"]
         pressed = pressure > 1e-9 * max(pressure.max(), 1e-300)
         end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
-    return {"mean_die_pressure": zone["mean_die_pressure"],
-            "contact_length": zone["contact_length"],
-            "contact_end_x": problem.comm.bcast(end, root=0),
-            "die_contact_fraction": zone["die_contact_fraction"]}
+    return problem.comm.bcast(end, root=0)
 
 
 def die_scalars_3d(problem: FlowProblem) -> dict[str, float]:
