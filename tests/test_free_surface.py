@@ -127,14 +127,17 @@ def test_lite_summaries_completed_are_the_full_ones():
     """Example 2 (mu = 0, three updates): the flows of shapes that move on keep only the numbers
     the update reads (run.solve_scene(lite=True)), and the last one's summary is completed. The
     run's summary equals the one with every flow post-processed in full, every entry and its order
-    but the wall times (0.40 s against 0.45 s measured), to 1e-9 (Debian 13's two ranks gave one
-    solve error estimate of 4.5e-11 that differed in its last bit between two runs)."""
+    but the wall times (0.40 s against 0.45 s measured), to 1e-9. The linear solves' error
+    estimate (about 3e-11) is only bounded: two runs of the same scene under Debian 13 gave
+    values 3 % apart."""
     scene = load_scene(EXAMPLE2, ["free_surface.update=true", "output.fields=false",
                                   "output.figures=false"])
     lite, full = _numbers(_solve(scene)[2]), _numbers(_solve(scene, lite=False)[2])
     assert list(lite) == list(full) and lite["free_surface.updates"] == 3
-    for key, value in full.items():  # two runs on two ranks differ in the last bit
-        if isinstance(value, float) and not math.isnan(value):
+    for key, value in full.items():
+        if key.endswith("solve_error_estimate"):  # rounding's own size, not a result
+            assert lite[key] < 1e-6 and value < 1e-6
+        elif isinstance(value, float) and not math.isnan(value):
             assert lite[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
         else:
             assert lite[key] == value or (lite[key] != lite[key] and value != value), key
