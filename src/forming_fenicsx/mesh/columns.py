@@ -63,12 +63,12 @@ class ColumnValues:
         self._nodes = mesh.geometry.x[nodes][:, :, :2]  # (cells, nodes, 2)
         reference = np.asarray(self._geometry.points)
         along = np.zeros(owned, dtype=int) - 1  # the reference coordinate along x, or -1
+        width = np.ptp(self._nodes[:, :, 0], axis=1)
         for axis in (0, 1):
             spread = np.zeros(owned)
             for level in np.unique(reference[:, axis]):
                 row = self._nodes[:, np.isclose(reference[:, axis], level), 0]
                 spread = np.maximum(spread, row.max(axis=1) - row.min(axis=1))
-            width = np.ptp(self._nodes[:, :, 0], axis=1)
             along[(along < 0) & (spread <= VERTICAL * width)] = axis
         self._cells = np.flatnonzero(along >= 0).astype(np.int32)
         self._along = along[self._cells]
@@ -123,8 +123,10 @@ class ColumnValues:
         pair_cell = np.repeat(np.arange(len(self._cells)), spans)  # index into self._cells
         pair_station = np.repeat(first, spans) + _ranges(spans)
         s = self._invert(pair_cell, stations[pair_station])
-        bottom = self._height(pair_cell, s, 0.0)
-        top = self._height(pair_cell, s, 1.0)
+        # y at the t levels along the line x = const through each cell: its bottom and top first
+        # and last (the Lagrange levels include t = 0 and 1)
+        column = np.einsum("pab,pa->pb", self._y[pair_cell], _basis(s, self._levels)[0])
+        bottom, top = column[:, 0], column[:, -1]
         low, high = np.minimum(bottom, top), np.maximum(bottom, top)
         # the pairs by station, then upward; a point's cell is the last pair of its station below
         # it (a key that orders stations first: heights span less than `span`)
@@ -148,7 +150,8 @@ class ColumnValues:
                                 index)
         hit = np.flatnonzero(held)
         pair = candidate[hit]
-        t = self._rise(pair_cell[pair], s[pair], points[hit, 1], bottom[pair], top[pair])
+        t = _newton(lambda value: _interpolate(column[pair], value, self._levels),
+                    (points[hit, 1] - bottom[pair]) / (top[pair] - bottom[pair]), points[hit, 1])
         along = self._along[pair_cell[pair]]
         reference = np.where(along[:, None] == 0, np.column_stack([s[pair], t]),
                              np.column_stack([t, s[pair]]))
@@ -184,18 +187,6 @@ class ColumnValues:
         s = (x - low) / (high - low)
         s = np.where(nodes[:, 0] <= nodes[:, -1], s, 1.0 - s)  # x may fall along s
         return _newton(lambda value: _interpolate(nodes, value, self._levels), s, x)
-
-    def _height(self, pair_cell: np.ndarray, s: np.ndarray, t: float) -> np.ndarray:
-        """y(s, t) in each cell."""
-        column = np.einsum("pab,pa->pb", self._y[pair_cell], _basis(s, self._levels)[0])
-        return _interpolate(column, np.full_like(s, t), self._levels)[0]
-
-    def _rise(self, pair_cell: np.ndarray, s: np.ndarray, y: np.ndarray, bottom: np.ndarray,
-              top: np.ndarray) -> np.ndarray:
-        """t with y(s, t) = y in each cell, from the straight cell's value."""
-        column = np.einsum("pab,pa->pb", self._y[pair_cell], _basis(s, self._levels)[0])
-        return _newton(lambda value: _interpolate(column, value, self._levels),
-                       (y - bottom) / (top - bottom), y)
 
 
 def _basis(s: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
