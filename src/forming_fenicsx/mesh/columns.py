@@ -151,7 +151,8 @@ class ColumnValues:
         hit = np.flatnonzero(held)
         pair = candidate[hit]
         t = _newton(lambda value: _interpolate(column[pair], value, self._levels),
-                    (points[hit, 1] - bottom[pair]) / (top[pair] - bottom[pair]), points[hit, 1])
+                    (points[hit, 1] - bottom[pair]) / (top[pair] - bottom[pair]), points[hit, 1],
+                    self._levels)
         along = self._along[pair_cell[pair]]
         reference = np.where(along[:, None] == 0, np.column_stack([s[pair], t]),
                              np.column_stack([t, s[pair]]))
@@ -186,7 +187,8 @@ class ColumnValues:
         low, high = self._low[pair_cell], self._high[pair_cell]
         s = (x - low) / (high - low)
         s = np.where(nodes[:, 0] <= nodes[:, -1], s, 1.0 - s)  # x may fall along s
-        return _newton(lambda value: _interpolate(nodes, value, self._levels), s, x)
+        return _newton(lambda value: _interpolate(nodes, value, self._levels), s, x,
+                       self._levels)
 
 
 def _basis(s: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -211,8 +213,11 @@ def _interpolate(nodes: np.ndarray, s: np.ndarray, levels: np.ndarray
     return np.einsum("pa,pa->p", values, nodes), np.einsum("pa,pa->p", slopes, nodes)
 
 
-def _newton(function, guess: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Newton's method for function(v)[0] = target, function(v)[1] its derivative."""
+def _newton(function, guess: np.ndarray, target: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Newton's method for function(v)[0] = target, function(v)[1] its derivative; the guess
+    itself on two ``levels`` (a linear map: the straight cell's guess is the root)."""
+    if len(levels) == 2:
+        return guess
     value = guess
     for _ in range(NEWTON_STEPS):
         result, slope = function(value)
