@@ -28,32 +28,21 @@ from forming_fenicsx.post.die import die_profile
 from forming_fenicsx.post.free_surface import SurfaceNotFound, _stations, flux_surface
 from forming_fenicsx.post.sanity import free_surfaces
 from forming_fenicsx.post.summary import scalars, update_scalars
+from forming_fenicsx.verification.verification import wavy_streamlines
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 ROD = DEMOS / "aluminium_rod_cold.toml"
 SWELL = DEMOS / "newtonian_extrudate_swell.toml"
 EXAMPLE2 = DEMOS / "example2_drawing.toml"
-A, K = 0.1, 2.0  # the verification field's streamlines y = c (1 + A sin(K x))
 
 
 def _surface_error(degree: int, cells: int, axisymmetric: bool) -> float:
-    """The flux surface through (0, 0.5) of a field with the streamlines y = c s(x), s = 1 + A
-    sin(K x), and the axis y = 0 among them (stream function y/s, or y^2/(2 s^2) axisymmetric),
-    interpolated on Q1 or Q2 over [0, 2] x [0, 1], against the exact y = 0.5 s(x)."""
-    mesh = dolfinx.mesh.create_rectangle(
-        MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([2.0, 1.0])], [2 * cells, cells],
-        dolfinx.mesh.CellType.quadrilateral)
-    u = dolfinx.fem.Function(function_space(mesh, "P", degree, (2,)))
-    power = 2 if axisymmetric else 1
-
-    def field(p):
-        s, ds = 1 + A * np.sin(K * p[0]), A * K * np.cos(K * p[0])
-        return np.vstack([s ** -power, p[1] * ds * s ** (-power - 1)])
-
-    u.interpolate(field)
+    """The flux surface through (0, 0.5) of the field with the streamlines y = c (1 + 0.1
+    sin 2x) interpolated on Q1 or Q2 (verification.wavy_streamlines), against the exact one."""
+    u, exact = wavy_streamlines(degree, cells, axisymmetric)
     line, on_wall = flux_surface(u, np.ones_like, (0.0, 0.5), 2.0, 0.25 / cells, axisymmetric)
     assert on_wall is None
-    return float(np.abs(line[:, 1] - 0.5 * (1 + A * np.sin(K * line[:, 0]))).max())
+    return float(np.abs(line[:, 1] - exact(line[:, 0], 0.5)).max())
 
 
 @pytest.mark.parametrize("degree, order", [(1, 2.0), (2, 3.0)])

@@ -423,6 +423,9 @@ class Accuracy:
                              f"give the first estimate); got {self.max_levels}")
 
 
+SURFACE_METHODS = ("flux_level", "least_squares")
+
+
 @dataclass
 class FreeSurface:
     """The free surfaces as the flow decides them (app/free_surface.py, docs/free_surface.md): with
@@ -434,8 +437,14 @@ class FreeSurface:
     update: bool = False
     tolerance: float = 1e-3
     max_updates: int = 8
+    # the streamline from where the contact ends: the flux level (post/free_surface.py) or the
+    # least-squares surface form (post/surface_least_squares.py)
+    method: str = "flux_level"
 
     def check(self) -> None:
+        if self.method not in SURFACE_METHODS:
+            raise SceneError("free_surface.method", f"must be one of {', '.join(SURFACE_METHODS)}"
+                             f"; got {self.method!r}")
         if not 0 < self.tolerance < 0.1:
             raise SceneError("free_surface.tolerance", "must lie in (0, 0.1) (the largest move of "
                              f"the surface over the exit half-size); got {self.tolerance}")

@@ -106,7 +106,10 @@ def quadrature_space(mesh, degree: int, shape: tuple[int, ...]):
     if LEGACY:
         import ufl
 
-        if len(shape) == 1:
+        if not shape:
+            element = ufl.FiniteElement("Quadrature", mesh.ufl_cell(), degree,
+                                        quad_scheme="default")
+        elif len(shape) == 1:
             element = ufl.VectorElement("Quadrature", mesh.ufl_cell(), degree, dim=shape[0],
                                         quad_scheme="default")
         else:

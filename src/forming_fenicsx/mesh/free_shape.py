@@ -68,6 +68,18 @@ def wall_height(profile: DieProfile, x: float) -> float:
     return profile.radius_at(x)
 
 
+def onto_wall(line: np.ndarray, wall: DieProfile) -> float | None:
+    """The points of a surface (N, 2) after its first that lie past the die ``wall`` put back
+    onto it (in place); returns the last x put there, None if none was."""
+    on_wall = None
+    for i in range(1, len(line)):
+        if wall.start[0] <= line[i, 0] <= wall.end[0]:
+            limit = wall_height(wall, line[i, 0])
+            if line[i, 1] > limit:
+                line[i, 1], on_wall = limit, float(line[i, 0])
+    return on_wall
+
+
 def clipped(profile: DieProfile, start: float, end: float, snap: float,
             start_snap: float | None = None) -> DieProfile:
     """The die wall from x = ``start`` to x = ``end``, the ends moved onto a corner of the wall

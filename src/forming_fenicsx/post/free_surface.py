@@ -43,8 +43,9 @@ import numpy as np
 
 from forming_fenicsx.config.die_profile import DieProfile
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.mesh.free_shape import FreeShape, clipped, wall_height
+from forming_fenicsx.mesh.free_shape import FreeShape, clipped, onto_wall, wall_height
 from forming_fenicsx.mesh.columns import ColumnValues
+from forming_fenicsx.post.surface_least_squares import StandingSurface, least_squares_surface
 
 STEPS_PER_CELL = 4
 # the growth of the stations' spacing from a graded corner (flux_surface)
@@ -108,14 +109,29 @@ def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray
     found[~inside] = (np.sqrt(heights[~inside] ** 2 + 2 * rest) if axisymmetric
                       else heights[~inside] + rest)
     found[0] = start[1]
-    on_wall = None
-    if wall is not None:
-        for i in range(1, len(xs)):
-            if wall.start[0] <= xs[i] <= wall.end[0]:
-                limit = wall_height(wall, xs[i])
-                if found[i] > limit:
-                    found[i], on_wall = limit, xs[i]
-    return np.column_stack([xs, found]), on_wall
+    line = np.column_stack([xs, found])
+    return line, None if wall is None else onto_wall(line, wall)
+
+
+def streamline(problem: FlowProblem, top: Callable[[np.ndarray], np.ndarray],
+               start: tuple[float, float], end_x: float, grading: float = 1.0,
+               toward_end: bool = False, wall: DieProfile | None = None
+               ) -> tuple[np.ndarray, float | None]:
+    """The streamline of the problem's velocity from ``start`` to x = ``end_x`` at stations
+    STEPS_PER_CELL an element (graded as _stations), by the scene's free_surface.method: the flux
+    level (flux_surface) or the least-squares surface (surface_least_squares.py, from the
+    current top boundary ``top``). Returns as flux_surface."""
+    scene = problem.scene
+    g, step = scene.geometry, scene.discretisation.mesh_size / STEPS_PER_CELL
+    if scene.free_surface.method == "least_squares":
+        xs, _ = _stations(start[0], end_x, step, grading, toward_end)
+        try:
+            return least_squares_surface(problem.u, xs, start, top, g.axisymmetric,
+                                         scene.discretisation.degree, wall)
+        except StandingSurface as error:
+            raise SurfaceNotFound(str(error)) from error
+    return flux_surface(problem.u, top, start, end_x, step, g.axisymmetric, wall, grading,
+                        toward_end)
 
 
 def _stations(start: float, end: float, step: float, grading: float, toward_end: bool = False
@@ -213,9 +229,8 @@ def updated_stock(problem: FlowProblem, shape: FreeShape
     scene = problem.scene
     g, size = scene.geometry, scene.discretisation.mesh_size
     die, h0, start = g.profile(), 0.5 * g.entry_thickness, shape.wall.start[0]
-    line, _ = flux_surface(problem.u, shape.height, (0.0, h0), start, size / STEPS_PER_CELL,
-                           g.axisymmetric, grading=scene.discretisation.corner_grading,
-                           toward_end=True)
+    line, _ = streamline(problem, shape.height, (0.0, h0), start,
+                         grading=scene.discretisation.corner_grading, toward_end=True)
     x, y = line[:, 0], np.minimum(line[:, 1], h0)  # a bulge above the stock is kept as drawn
     wall = np.array([wall_height(die, xi) for xi in x])
     gap = wall[-1] - y[-1]
@@ -279,8 +294,8 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float |
     size = scene.discretisation.mesh_size
     if shape.wall is None:  # the square die: the product leaves its face at the corner
         corner = tuple(shape.downstream[0])
-        line, _ = flux_surface(problem.u, shape.height, corner, g.length, size / STEPS_PER_CELL,
-                               g.axisymmetric, grading=scene.discretisation.corner_grading)
+        line, _ = streamline(problem, shape.height, corner, g.length,
+                             grading=scene.discretisation.corner_grading)
         return FreeShape(None, line)
     die, disc = g.profile(), scene.discretisation
     upstream, start, gap, step = None, shape.wall.start[0], 0.0, None
@@ -293,8 +308,8 @@ def updated_shape(problem: FlowProblem, shape: FreeShape, contact_end_x: float |
     grading = 1.0
     if abs(corner - end) <= SNAP * size:
         end, grading = corner, disc.corner_grading if corner == die.end[0] else disc.wall_grading
-    line, last = flux_surface(problem.u, shape.height, (end, wall_height(die, end)), g.length,
-                              size / STEPS_PER_CELL, g.axisymmetric, die, grading)
+    line, last = streamline(problem, shape.height, (end, wall_height(die, end)), g.length,
+                            grading, wall=die)
     if last is not None and last > end + size:  # the product would enter the die after an
         # element (within one, the penalty's own penetration): the contact goes on
         end = last

@@ -15,7 +15,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from forming_fenicsx.physics.closed_forms import radial_flow_stress_rise
-from forming_fenicsx.core.compat import GHOST_MODE, mesh_from_gmsh
+from forming_fenicsx.core.compat import GHOST_MODE, function_space, mesh_from_gmsh
 from forming_fenicsx.coupled.coupling import coupled_problem
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.mesh.geometry import FormingMesh
@@ -332,3 +332,31 @@ def homogeneous_extension(element: str, method: str, formulation: str = "penalty
     return {"velocity_error": comm.allreduce(error, op=MPI.MAX),
             "force_ratio": reaction(problem) / (np.pi * RADIAL["K"] * rate**n),
             "solves": result.linear_solves}
+
+
+WAVE_AMPLITUDE, WAVE_NUMBER = 0.1, 2.0
+
+
+def wavy_streamlines(degree: int, cells: int, axisymmetric: bool, back: float = 0.0
+                     ) -> tuple[dolfinx.fem.Function, Callable[[np.ndarray, float], np.ndarray]]:
+    """A divergence-free field (plane, or axisymmetric with y the radius) whose streamlines are
+    y = c s(x), s = 1 + 0.1 sin(2x), the axis y = 0 among them (stream function y/s, or
+    y^2/(2 s^2)), interpolated on Q1 or Q2 over [0, 2] x [0, 1] (2 cells x cells); ``back``
+    subtracted from u_x for x > 1 (a flow that runs back there). Returns it and the exact
+    streamline y(x, c). The free surface's check (docs/free_surface.md)."""
+    mesh = dolfinx.mesh.create_rectangle(
+        MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([2.0, 1.0])], [2 * cells, cells],
+        dolfinx.mesh.CellType.quadrilateral)
+    u = dolfinx.fem.Function(function_space(mesh, "P", degree, (2,)))
+    power = 2 if axisymmetric else 1
+
+    def shape(x: np.ndarray) -> np.ndarray:
+        return 1 + WAVE_AMPLITUDE * np.sin(WAVE_NUMBER * x)
+
+    def field(p: np.ndarray) -> np.ndarray:
+        s = shape(p[0])
+        ds = WAVE_AMPLITUDE * WAVE_NUMBER * np.cos(WAVE_NUMBER * p[0])
+        return np.vstack([s ** -power - back * (p[0] > 1.0), p[1] * ds * s ** (-power - 1)])
+
+    u.interpolate(field)
+    return u, lambda x, c: c * shape(x)
