@@ -47,12 +47,13 @@ class PointValues:
         self.missed = 0
 
     def evaluate(self, points: np.ndarray, outside: str = "nan") -> tuple[np.ndarray, np.ndarray]:
-        """The functions at the points (N, 2) and where they were taken; a point in no rank's cell
-        gets nan, or by ``outside`` the values of the nearest cell (OUTSIDE, module docstring)."""
+        """The functions at the points (N, 2), or (N, 3) in 3D, and where they were taken; a point
+        in no rank's cell gets nan, or by ``outside`` the values of the nearest cell (OUTSIDE,
+        module docstring; "nan" only in 3D)."""
         if outside not in OUTSIDE:
             raise ValueError(f"outside must be one of {OUTSIDE}; got {outside!r}")
         padded = np.zeros((len(points), 3))
-        padded[:, :2] = points
+        padded[:, :np.shape(points)[1]] = points
         cells = colliding_cells(self.mesh, padded, self._tree)
         found = cells >= 0
         local = np.zeros((len(points), self.width))

@@ -8,7 +8,8 @@ mesh, COMM_SELF: every rank holds the whole surface) and u sampled on the surfac
 
 the squared volume flux across it (w = y axisymmetric, 1 in plane strain; u_T = u_x, u_N = u_y):
 a(h, g) = int w (u_T . grad h)(u_T . grad g), L(g) = int w u_N (u_T . grad g). On a surface
-y = h(x, z) of a 3D product the same form holds with u_T = (u_x, u_z) over a mesh of (x, z): the
+y = h(x, z) of a 3D product the same form holds with u_T = (u_x, u_z) over a mesh of (x, z)
+(surface_by_least_squares takes either; checked on a 3D field, the 3D update not built): the
 least-squares surface equation of Ripert, Fourment and Chenot (AMSES 2:15, 2015), which they
 found to work where plain Galerkin diverges. Since u is sampled at (x, h(x)), J depends on h
 through the samples too: the samples are taken on the last h and the problem solved again
@@ -56,43 +57,18 @@ def least_squares_surface(u: dolfinx.fem.Function, stations: np.ndarray,
     surface ``guess(x)`` (default ``top``). With ``wall``, a station past the die wall is put back
     onto it. Returns h at the stations (N, 2) and the last x put on the wall (None if none was);
     raises StandingSurface. Collective (the velocity's evaluation)."""
-    surface = _surface_mesh(stations)
-    space = function_space(surface, "P", degree)
-    h, g = ufl.TrialFunction(space), ufl.TestFunction(space)
-    height = dolfinx.fem.Function(space)
-    height.interpolate(lambda p: (top if guess is None else guess)(p[0]))
-    rule = 2 * degree + 2
-    along, across = (dolfinx.fem.Function(quadrature_space(surface, rule, ())) for _ in "xy")
-    weight = dolfinx.fem.Function(quadrature_space(surface, rule, ()))
-    weight.x.array[:] = 1.0
-    dx = ufl.dx(metadata={"quadrature_degree": rule})
-    a = dolfinx.fem.form(weight * along * h.dx(0) * along * g.dx(0) * dx)
-    L = dolfinx.fem.form(weight * across * along * g.dx(0) * dx)
-    first = dolfinx.fem.locate_dofs_geometrical(space, lambda p: np.isclose(p[0], stations[0]))
-    inflow = dolfinx.fem.dirichletbc(dolfinx.fem.Constant(surface, float(start[1])), first, space)
-    solution = dolfinx.fem.Function(space)
-    problem = LinearProblem(a, [L], solution, [inflow], prefix="surface_least_squares",
-                            options=DIRECT)
-    sample = _Sampler(surface, space, rule, ColumnValues(u), top)
-    try:
-        for _ in range(FIXED_POINT_STEPS):
-            values = sample(height)
-            standing = sample.standing(values)
-            if np.any(standing):
-                x = float(sample.cell_x[np.argmax(standing)])
-                raise StandingSurface(f"the flow along the surface stands or runs back at x = "
-                                      f"{x:.6g}")
-            sample.place(along, values[:, :1])
-            sample.place(across, values[:, 1:])
-            if axisymmetric:
-                sample.place(weight, sample.heights[:, None])
-            problem.solve()
-            change = np.max(np.abs(solution.x.array - height.x.array))
-            height.x.array[:] = solution.x.array
-            if change < FIXED_POINT_TOLERANCE * abs(start[1]):
-                break
-    finally:
-        problem.destroy()
+    surface = _interval_mesh(stations)
+    velocity = ColumnValues(u)
+
+    def sample(params: np.ndarray, heights: np.ndarray) -> np.ndarray:
+        points = np.column_stack([params[:, 0], np.minimum(heights, top(params[:, 0]))])
+        return velocity.evaluate(points, outside="column")[0][:, :2]
+
+    height = surface_by_least_squares(
+        surface, degree, sample, lambda p: np.isclose(p[0], stations[0]),
+        lambda p: np.full(p.shape[1], float(start[1])),
+        lambda p: (top if guess is None else guess)(p[0]), axisymmetric,
+        FIXED_POINT_TOLERANCE * abs(start[1]))
     found = height.eval(np.column_stack([stations, np.zeros((len(stations), 2))]),
                         _cells_of(surface, stations))[:, 0]
     found[0] = start[1]
@@ -100,7 +76,66 @@ def least_squares_surface(u: dolfinx.fem.Function, stations: np.ndarray,
     return line, None if wall is None else onto_wall(line, wall)
 
 
-def _surface_mesh(stations: np.ndarray) -> dolfinx.mesh.Mesh:
+def surface_by_least_squares(surface: dolfinx.mesh.Mesh, degree: int,
+                             sample: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                             inflow: Callable[[np.ndarray], np.ndarray],
+                             inflow_height: Callable[[np.ndarray], np.ndarray],
+                             guess: Callable[[np.ndarray], np.ndarray], weighted: bool,
+                             tolerance: float) -> dolfinx.fem.Function:
+    """h over the parameter mesh ``surface`` (x, or (x, z) of a 3D product's surface y = h(x, z);
+    COMM_SELF) minimising J (module docstring) with h = ``inflow_height`` where ``inflow``, by the
+    fixed point on the velocity samples from ``guess`` (the three take the parameters' points
+    (3, N), as dolfinx's interpolation and locators): ``sample(params (N, d), heights (N,))``
+    gives (u_T..., u_N) (N, d + 1) at the surface points; ``weighted``: w = h (a round
+    product's). Stops when h moves by less than ``tolerance``; raises StandingSurface."""
+    space = function_space(surface, "P", degree)
+    h, g = ufl.TrialFunction(space), ufl.TestFunction(space)
+    height, solution = dolfinx.fem.Function(space), dolfinx.fem.Function(space)
+    height.interpolate(guess)
+    rule = 2 * degree + 2
+    dim = surface.topology.dim
+    scalar = quadrature_space(surface, rule, ())
+    tangent = [dolfinx.fem.Function(scalar) for _ in range(dim)]
+    normal, weight = dolfinx.fem.Function(scalar), dolfinx.fem.Function(scalar)
+    weight.x.array[:] = 1.0
+    dx = ufl.dx(metadata={"quadrature_degree": rule})
+
+    def along(f):  # u_T . grad f
+        return sum(t * f.dx(i) for i, t in enumerate(tangent))
+
+    a = dolfinx.fem.form(weight * along(h) * along(g) * dx)
+    L = dolfinx.fem.form(weight * normal * along(g) * dx)
+    given = dolfinx.fem.Function(space)
+    given.interpolate(inflow_height)
+    bc = dolfinx.fem.dirichletbc(given, dolfinx.fem.locate_dofs_geometrical(space, inflow))
+    problem = LinearProblem(a, [L], solution, [bc], prefix="surface_least_squares",
+                            options=DIRECT)
+    points = _GaussPoints(surface, space, rule)
+    try:
+        for _ in range(FIXED_POINT_STEPS):
+            heights = points.values(height)
+            values = sample(points.params, heights)
+            standing = points.standing(values[:, 0])
+            if np.any(standing):
+                x = float(points.params[points.first(standing), 0])
+                raise StandingSurface(f"the flow along the surface stands or runs back at x = "
+                                      f"{x:.6g}")
+            for i, t in enumerate(tangent):
+                points.place(t, values[:, i])
+            points.place(normal, values[:, dim])
+            if weighted:
+                points.place(weight, heights)
+            problem.solve()
+            change = np.max(np.abs(solution.x.array - height.x.array))
+            height.x.array[:] = solution.x.array
+            if change < tolerance:
+                break
+    finally:
+        problem.destroy()
+    return height
+
+
+def _interval_mesh(stations: np.ndarray) -> dolfinx.mesh.Mesh:
     """An interval mesh (COMM_SELF) whose nodes are the stations."""
     count = len(stations) - 1
     mesh = dolfinx.mesh.create_interval(MPI.COMM_SELF, count, [0.0, 1.0])
@@ -118,49 +153,37 @@ def _cells_of(mesh: dolfinx.mesh.Mesh, xs: np.ndarray) -> np.ndarray:
     return order[index].astype(np.int32)
 
 
-class _Sampler:
-    """The velocity at the Gauss points of the surface mesh, on the surface y = h(x) (at most the
-    mesh's ``top``): the points (``points``, cell by cell in the quadrature space's order) and h
-    there (``heights``)."""
+class _GaussPoints:
+    """The Gauss points of a parameter mesh's cells: their parameters (``params`` (N, d), cell by
+    cell in the quadrature space's order), a function of the mesh's space there, and values
+    placed into a quadrature function."""
 
-    def __init__(self, mesh: dolfinx.mesh.Mesh, space, rule: int, velocity: ColumnValues,
-                 top: Callable[[np.ndarray], np.ndarray]):
+    def __init__(self, mesh: dolfinx.mesh.Mesh, space, rule: int):
         reference = quadrature_points(mesh, rule)
-        nodes = mesh.geometry.x[cell_geometry_nodes(mesh)][:, :2, 0]  # (cells, 2): the ends
-        self._x = (nodes[:, :1] + reference[:, 0][None, :] * (nodes[:, 1:2] - nodes[:, :1]))
-        self._top = top(self._x.ravel())
-        element = basix_element(space)
-        self._basis = element.tabulate(0, reference)[0, :, :, 0]  # (points, dofs)
+        geometry = basix_element(mesh)
+        nodes = mesh.geometry.x[cell_geometry_nodes(mesh)][:, :, :mesh.topology.dim]
+        self._shape = (len(nodes), len(reference))
+        self.params = np.einsum("pn,cnd->cpd", geometry.tabulate(0, reference)[0, :, :, 0],
+                                nodes).reshape(-1, mesh.topology.dim)
+        self._basis = basix_element(space).tabulate(0, reference)[0, :, :, 0]
         self._dofs = cell_dofs(space.dofmap)
-        self._velocity = velocity
-        self.points = np.zeros((self._x.size, 2))
-        self.heights = np.zeros(self._x.size)
 
-    def __call__(self, height: dolfinx.fem.Function) -> np.ndarray:
-        """(u_x, u_y) at the Gauss points on the surface h (cells x points, 2), above the
-        mesh's top as at the top (the polynomial extended beyond a sticking corner's cells ran
-        back)."""
-        self.heights = np.einsum("pd,cd->cp", self._basis,
-                                 height.x.array[self._dofs]).ravel()
-        self.points = np.column_stack([self._x.ravel(), np.minimum(self.heights, self._top)])
-        values, _ = self._velocity.evaluate(self.points, outside="column")
-        return values[:, :2]
+    def values(self, function: dolfinx.fem.Function) -> np.ndarray:
+        """The function at the points (N,)."""
+        return np.einsum("pd,cd->cp", self._basis, function.x.array[self._dofs]).ravel()
 
     @staticmethod
     def place(function: dolfinx.fem.Function, values: np.ndarray) -> None:
-        """A quadrature function's values at the Gauss points, from ``values`` (cells x points,
-        components) in the order of ``points``."""
-        dofs = cell_dofs(function.function_space.dofmap)
-        function.x.array.reshape(-1, values.shape[1])[dofs.ravel()] = values
+        """A scalar quadrature function's values at the points, from ``values`` (N,)."""
+        function.x.array[cell_dofs(function.function_space.dofmap).ravel()] = values
 
-    def standing(self, values: np.ndarray) -> np.ndarray:
-        """Per cell: the flow along the surface runs back or stands at every Gauss point (u_x
-        not positive). Where it runs forward at some, a streamline passes; backflow at others is
-        the noise of a sticking corner's stagnation point, where v.n = 0 holds in either
-        direction."""
-        return np.all(values[:, 0].reshape(self._x.shape) <= 0.0, axis=1)
+    def standing(self, along: np.ndarray) -> np.ndarray:
+        """Per cell: the flow along the surface (``along``, u_x at the points) runs back or stands
+        at every Gauss point. Where it runs forward at some, a streamline passes; backflow at
+        others is the noise of a sticking corner's stagnation point, where v.n = 0 holds in
+        either direction."""
+        return np.all(along.reshape(self._shape) <= 0.0, axis=1)
 
-    @property
-    def cell_x(self) -> np.ndarray:
-        """Each cell's first Gauss point's x."""
-        return self._x[:, 0]
+    def first(self, cells: np.ndarray) -> int:
+        """The first Gauss point of the first cell marked."""
+        return int(np.argmax(cells)) * self._shape[1]

@@ -360,3 +360,32 @@ def wavy_streamlines(degree: int, cells: int, axisymmetric: bool, back: float = 
 
     u.interpolate(field)
     return u, lambda x, c: c * shape(x)
+
+
+def wavy_stream_surface(degree: int, cells: int, drift: float = 0.2
+                        ) -> tuple[dolfinx.fem.Function, Callable[[np.ndarray, np.ndarray],
+                                                                  np.ndarray]]:
+    """The 3D field u = (1/s, y s'/s^2, drift), s = 1 + 0.1 sin(2x) (divergence-free), on Q1 or
+    Q2 over [0, 2] x [0, 1] x [0, 1] (2 cells x cells x cells): its streamlines keep y/s(x) and
+    drift in z by drift S(x), S = int_0^x s. Returns it and the exact stream surface y = h(x, z)
+    through the curve y = 0.5 (1 + 0.2 z) at x = 0 (continued to z < 0), h = 0.5 (1 + 0.2 (z -
+    drift S(x))) s(x): the least-squares surface's check over (x, z) (docs/verification.md)."""
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD, [np.array([0.0, 0.0, 0.0]), np.array([2.0, 1.0, 1.0])],
+        [2 * cells, cells, cells], dolfinx.mesh.CellType.hexahedron)
+    u = dolfinx.fem.Function(function_space(mesh, "P", degree, (3,)))
+
+    def shape(x: np.ndarray) -> np.ndarray:
+        return 1 + WAVE_AMPLITUDE * np.sin(WAVE_NUMBER * x)
+
+    def field(p: np.ndarray) -> np.ndarray:
+        s = shape(p[0])
+        ds = WAVE_AMPLITUDE * WAVE_NUMBER * np.cos(WAVE_NUMBER * p[0])
+        return np.vstack([1 / s, p[1] * ds / s**2, np.full(p.shape[1], drift)])
+
+    def exact(x: np.ndarray, z: np.ndarray) -> np.ndarray:
+        travelled = x + WAVE_AMPLITUDE / WAVE_NUMBER * (1 - np.cos(WAVE_NUMBER * x))
+        return 0.5 * (1 + 0.2 * (z - drift * travelled)) * shape(x)
+
+    u.interpolate(field)
+    return u, exact
