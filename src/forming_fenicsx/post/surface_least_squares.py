@@ -10,10 +10,11 @@ the squared volume flux across it (w = y axisymmetric, 1 in plane strain; u_T = 
 a(h, g) = int w (u_T . grad h)(u_T . grad g), L(g) = int w u_N (u_T . grad g). On a surface
 y = h(x, z) of a 3D product the same form holds with u_T = (u_x, u_z) over a mesh of (x, z)
 (surface_by_least_squares takes either; checked on a 3D field, the 3D update not built): the
-least-squares surface equation of Ripert, Fourment and Chenot (AMSES 2:15, 2015), which they
-found to work where plain Galerkin diverges. Since u is sampled at (x, h(x)), J depends on h
-through the samples too: the samples are taken on the last h and the problem solved again
-(a fixed point) until h moves by less than FIXED_POINT_TOLERANCE of y0.
+surface equation of Ripert, Fourment and Chenot (AMSES 2:15, 2015) by plain least squares (they
+report plain Galerkin diverging, plain least squares failing at contact and an upwind
+least-squares form working; the upwind form is not built). Since u is sampled at (x, h(x)), J
+depends on h through the samples too: the samples are taken on the last h and the problem solved
+again (a fixed point) until h moves by less than FIXED_POINT_TOLERANCE of y0.
 
 In 2D the minimiser makes each element's mean slope int w u_x u_y / int w u_x^2: an upwind march
 from the inflow end, exact for a divergence-free field's streamline as the elements shrink
