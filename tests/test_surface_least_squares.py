@@ -3,6 +3,7 @@ a prescribed field (verification.wavy_streamlines) with observed orders, a flow 
 and the update by it (free_surface.method = "least_squares") beside the flux level's."""
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 
 import dolfinx.mesh
@@ -11,7 +12,7 @@ import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.app.free_surface import solve_free_surface
-from forming_fenicsx.app.run import completed_summary, solve_scene
+from forming_fenicsx.app.run import completed_summary, run_scene, solve_scene
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.post.free_surface import _stations
@@ -20,7 +21,8 @@ from forming_fenicsx.post.surface_least_squares import (StandingSurface, least_s
                                                         surface_by_least_squares)
 from forming_fenicsx.verification.verification import wavy_stream_surface, wavy_streamlines
 
-EXAMPLE2 = Path(__file__).resolve().parents[1] / "demos" / "example2_drawing.toml"
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+EXAMPLE2 = DEMOS / "example2_drawing.toml"
 
 
 def _error(degree: int, cells: int, axisymmetric: bool) -> float:
@@ -118,3 +120,21 @@ def test_example_2_updated_by_least_squares_as_by_the_flux_level():
     assert change[0] == pytest.approx(change[1], abs=1e-4)
     assert -0.016 < change[0] < -0.013
     assert least["drawing_stress"] == pytest.approx(level["drawing_stress"], rel=5e-3)
+
+
+def test_a_run_by_least_squares_writes_the_exit_profile(tmp_path):
+    """The annealed rod (0.4 mm mesh) by least squares through `forming run`'s path: its product
+    surface is not level to the last digit (half an exit thickness before the end it lies
+    lower than at the end), and the exit profile's section reaches the workpiece's top there
+    (product.product_top), not the end's half-size, which lay outside the workpiece ("the point
+    (36.8197, 3.49775) is not in the workpiece" on the default mesh)."""
+    scene = load_scene(DEMOS / "annealed_rod_drawing.toml", [
+        "discretisation.mesh_size=0.4", "free_surface.method=least_squares",
+        "output.fields=false", "output.figures=false"])
+    summary = run_scene(scene, tmp_path / "run")
+    assert summary["converged"] and summary["free_surface"]["converged"]
+    assert summary["free_surface_crossing"] < 0.003
+    with open(tmp_path / "run" / "exit_strain.csv") as table:
+        highest = max(float(row[0]) for row in list(csv.reader(table))[1:])
+    end = 0.5 * summary["free_surface"]["exit_diameter"]
+    assert end * (1 - 1e-4) < highest < end * (1 - 1e-6)

@@ -13,7 +13,7 @@ from ufl.core.expr import Expr
 
 from forming_fenicsx.core.compat import cell_geometry_nodes, colliding_cells
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.post.product import product_half_size
+from forming_fenicsx.post.product import product_top
 from forming_fenicsx.post.sections import values_at
 from forming_fenicsx.post.streamlines import streamline_strain
 
@@ -26,12 +26,13 @@ LAYER_POINTS = 8
 
 def exit_section(problem: FlowProblem, points: int) -> tuple[float, np.ndarray]:
     """The product's section half an exit thickness before the workpiece's end, x, and ``points``
-    heights on it from the axis to the surface (the product's half-size at its end,
-    product.product_half_size; the last a hair inside, more so under a free surface, which the
-    isoparametric cells, their nodes on it, follow to about 1e-7 of the size)."""
-    g, half = problem.scene.geometry, product_half_size(problem)
+    heights on it from the axis to the surface (the workpiece's top there, product.product_top;
+    the last a hair inside, more so under a free surface, which the isoparametric cells, their
+    nodes on it, follow to about 1e-7 of the size)."""
+    g = problem.scene.geometry
+    x = g.length - 0.5 * g.thinnest
     inside = 1e-6 if problem.scene.free_surface.update else 1e-9
-    return g.length - 0.5 * g.thinnest, np.linspace(0.0, half * (1 - inside), points)
+    return x, np.linspace(0.0, product_top(problem, x) * (1 - inside), points)
 
 
 def exit_profile(problem: FlowProblem, field: Expr, points: int = 41) -> dict[str, Any] | None:
