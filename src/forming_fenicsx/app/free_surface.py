@@ -83,9 +83,9 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
         except SurfaceNotFound as error:  # this shape stands
             if drafted():
                 problem, result, summary = finished()
-            stopped = (f"the free surface's update {moved + 1} could not be made: {error} (a "
-                       "bulge or a dead zone, which the update does not follow); the update "
-                       f"stopped, and the shape and the forces are those of update {moved}")
+            stopped = (f"the free surface's update {moved + 1} could not be made: {error} "
+                       f"({error.cause}); the update stopped, and the shape and the forces are "
+                       f"those of update {moved}")
             break
         move = max(shape_change(shape, new, scene.geometry.length), new.stock_miss) / h1
         updates.append({"linear_solves": summary["linear_solves"],

@@ -64,7 +64,12 @@ START_SNAP = 0.05
 
 class SurfaceNotFound(ValueError):
     """No streamline from the start passes a station: the flow at the top boundary stands or runs
-    back there (u_x <= 0) while the level lies beyond it."""
+    back there (u_x <= 0) while the level lies beyond it; ``cause``: what that likely is."""
+
+    def __init__(self, message: str,
+                 cause: str = "a bulge or a dead zone, which the update does not follow"):
+        super().__init__(message)
+        self.cause = cause
 
 
 def flux_surface(u: dolfinx.fem.Function, top: Callable[[np.ndarray], np.ndarray],
@@ -129,7 +134,13 @@ def streamline(problem: FlowProblem, top: Callable[[np.ndarray], np.ndarray],
             return least_squares_surface(problem.u, xs, start, top, g.axisymmetric,
                                          scene.discretisation.degree, wall)
         except StandingSurface as error:
-            raise SurfaceNotFound(str(error)) from error
+            if error.x - start[0] > scene.discretisation.mesh_size:
+                raise SurfaceNotFound(str(error)) from error
+            raise SurfaceNotFound(
+                f"{error}, within an element of where the contact ends (x = {start[0]:.6g})",
+                "at a sticking wall's corner the velocity vanishes and its direction, which the "
+                "least-squares surface takes its slope from, is noise; free_surface.method = "
+                '"flux_level" takes the flux under the wall there') from error
     return flux_surface(problem.u, top, start, end_x, step, g.axisymmetric, wall, grading,
                         toward_end)
 

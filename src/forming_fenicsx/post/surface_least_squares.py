@@ -44,7 +44,11 @@ FIXED_POINT_STEPS = 30
 
 class StandingSurface(ValueError):
     """The flow along the surface stands or runs back (u_x <= 0 over an element): no graph y(x)
-    is its streamline there."""
+    is its streamline there; ``x`` where."""
+
+    def __init__(self, x: float):
+        super().__init__(f"the flow along the surface stands or runs back at x = {x:.6g}")
+        self.x = x
 
 
 def least_squares_surface(u: dolfinx.fem.Function, stations: np.ndarray,
@@ -118,9 +122,7 @@ def surface_by_least_squares(surface: dolfinx.mesh.Mesh, degree: int,
             values = sample(points.params, heights)
             standing = points.standing(values[:, 0])
             if np.any(standing):
-                x = float(points.params[points.first(standing), 0])
-                raise StandingSurface(f"the flow along the surface stands or runs back at x = "
-                                      f"{x:.6g}")
+                raise StandingSurface(float(points.params[points.first(standing), 0]))
             for i, t in enumerate(tangent):
                 points.place(t, values[:, i])
             points.place(normal, values[:, dim])
