@@ -126,7 +126,7 @@ def test_example_2_updated_by_least_squares_as_by_the_flux_level():
     assert least["drawing_stress"] == pytest.approx(level["drawing_stress"], rel=5e-3)
 
 
-def test_a_run_by_least_squares_writes_the_exit_profile(tmp_path):
+def test_a_run_by_least_squares_writes_the_exit_profile(shared_tmp):
     """The annealed rod (0.4 mm mesh) by least squares through `forming run`'s path: its product
     surface is not level to the last digit (half an exit thickness before the end it lies
     lower than at the end), and the exit profile's section reaches the workpiece's top there
@@ -135,10 +135,10 @@ def test_a_run_by_least_squares_writes_the_exit_profile(tmp_path):
     scene = load_scene(DEMOS / "annealed_rod_drawing.toml", [
         "discretisation.mesh_size=0.4", "free_surface.method=least_squares",
         "output.fields=false", "output.figures=false"])
-    summary = run_scene(scene, tmp_path / "run")
+    summary = run_scene(scene, shared_tmp / "run")
     assert summary["converged"] and summary["free_surface"]["converged"]
     assert summary["free_surface_crossing"] < 0.003
-    with open(tmp_path / "run" / "exit_strain.csv") as table:
+    with open(shared_tmp / "run" / "exit_strain.csv") as table:
         highest = max(float(row[0]) for row in list(csv.reader(table))[1:])
     end = 0.5 * summary["free_surface"]["exit_diameter"]
     assert end * (1 - 1e-4) < highest < end * (1 - 1e-6)
