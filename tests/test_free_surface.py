@@ -17,7 +17,7 @@ import pytest
 from mpi4py import MPI
 
 from forming_fenicsx.app.free_surface import solve_free_surface
-from forming_fenicsx.app.run import completed_summary, run_scene, solve_scene
+from forming_fenicsx.app.run import completed_summary, run_scene, solve_scene, solve_updated
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.errors import SceneError
@@ -63,14 +63,6 @@ def _rod(land: float, update: bool = True):
                             f"free_surface.update={'true' if update else 'false'}"])
 
 
-def _solve(scene, lite: bool = True):
-    """The update as `forming run` makes it: the flows that move on with lite summaries, the last
-    one's completed (run.completed_summary); ``lite`` False: every flow post-processed in full."""
-    return solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
-        variant, previous=previous, generate=generate, quiet=True, lite=lite),
-        complete=lambda *solved: completed_summary(*solved, scene, MPI.COMM_WORLD))
-
-
 def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline():
     """The cold aluminium rod, 20 -> 12 mm through its 30 degree die with no land (0.6 mm mesh):
     the product leaves the die at its exit corner and goes on converging. One update: the
@@ -78,7 +70,7 @@ def test_product_leaves_a_die_without_land_and_its_surface_becomes_a_streamline(
     next update would move the surface by 7.2e-4 of the exit radius (measured; the narrowing
     halves with the mesh size, docs/free_surface.md)."""
     scene = _rod(0.0)
-    problem, _, summary, shape = _solve(scene)
+    problem, _, summary, shape = solve_updated(scene)
     table = summary["free_surface"]
     history = table["history"]
     assert table["converged"] and table["updates"] == 1
@@ -153,7 +145,7 @@ def test_a_newtonian_jet_swells_as_published():
     3 updates, each move about a tenth of the last (measured 0.11, 0.019, 0.0019, 1.7e-4 of the
     exit radius)."""
     scene = load_scene(SWELL)
-    problem, _, summary, shape = _solve(scene)
+    problem, _, summary, shape = solve_updated(scene)
     table = summary["free_surface"]
     moves = [row["surface_move"] for row in table["history"]]
     assert table["converged"] and table["updates"] <= 4
@@ -185,7 +177,7 @@ def test_the_updated_strip_keeps_its_volume_under_the_mixed_formulation():
         "free_surface.update=true", "discretisation.mesh_size=0.1", "discretisation.element=Q2",
         "discretisation.formulation=mixed", "discretisation.corner_grading=64",
         "discretisation.wall_grading=16", "penalty.augmented=true"])
-    _, _, summary, _ = _solve(scene)
+    _, _, summary, _ = solve_updated(scene)
     table = summary["free_surface"]
     assert table["converged"] and table["updates"] >= 1
     assert -0.006 < table["exit_thickness_change"] < -0.002
@@ -212,7 +204,7 @@ def test_an_update_onto_a_folded_mesh_is_not_taken(monkeypatch):
     monkeypatch.setattr(free_surface, "folded_cells", lambda mesh: 2)
     scene = _rod(0.0)
     fixed = solve_scene(_rod(0.0, update=False))[2]
-    _, _, summary, shape = _solve(scene)
+    _, _, summary, shape = solve_updated(scene)
     table = summary["free_surface"]
     assert table["updates"] == 0 and not table["converged"]
     assert table["exit_diameter_change"] == 0.0
@@ -251,7 +243,7 @@ def test_a_domain_whose_surfaces_are_streamlines_is_kept():
     (no update, the fixed run's numbers: two solves of one scene differ by 3e-12 under Debian 13;
     crossing 1.7e-6)."""
     fixed = solve_scene(_rod(2.0, update=False))[2]
-    _, _, summary, shape = _solve(_rod(2.0))
+    _, _, summary, shape = solve_updated(_rod(2.0))
     assert summary["free_surface"]["updates"] == 0 and summary["free_surface"]["converged"]
     assert summary["ram_pressure"] == pytest.approx(fixed["ram_pressure"], rel=1e-9)  # 3e-12 in D13
     assert shape.exit_height == 6.0 and summary["free_surface_crossing"] < 1e-4
@@ -314,7 +306,7 @@ def test_an_annealed_rod_leaves_its_stock_before_the_die():
 
     fixed = solve_scene(rod(False))[2]
     scene = rod(True)
-    _, _, summary, shape = _solve(scene)
+    _, _, summary, shape = solve_updated(scene)
     die, h0 = scene.geometry.profile(), 4.0
     assert fixed["free_surface_crossing_stock"] > 0.025
     assert summary["free_surface"]["converged"]
@@ -414,7 +406,7 @@ def test_the_square_dies_product_leaves_its_corner_as_a_streamline():
                  "discretisation.averaging=quadrature", "discretisation.mesh_size=0.25"]
     fixed = solve_scene(load_scene(DEMOS / "example1_extrusion.toml", overrides))[2]
     scene = load_scene(DEMOS / "example1_extrusion.toml", overrides + ["free_surface.update=true"])
-    _, _, summary, shape = _solve(scene)
+    _, _, summary, shape = solve_updated(scene)
     table, g = summary["free_surface"], scene.geometry
     assert table["converged"] and table["updates"] <= 2
     assert shape.wall is None and shape.downstream[0] == pytest.approx((10.0, 2.5))
@@ -450,7 +442,7 @@ def test_a_shape_settled_on_draft_flows_gets_the_scenes_own_flow():
     from rest on that shape to 3e-4 (measured 1.1e-4: two iterates that both meet delta = 1e-4
     and the balance)."""
     scene = load_scene(EXAMPLE2, ["free_surface.update=true", "friction.mu=0.4"])
-    problem, _, summary, shape = _solve(scene)
+    problem, _, summary, shape = solve_updated(scene)
     history = summary["free_surface"]["history"]
     assert [entry["draft"] for entry in history] == [True] * (len(history) - 1) + [False]
     assert history[-1]["surface_move"] < scene.free_surface.tolerance
@@ -483,7 +475,7 @@ def test_a_15_degree_wire_settled_to_1e_4_crosses_below_a_thousandth():
         "geometry.exit_diameter=1.789", "geometry.die_angle=15", "friction.mu=0",
         "discretisation.corner_grading=64", "discretisation.wall_grading=16",
         "free_surface.update=true", "free_surface.tolerance=1e-4"])
-    _, _, summary, shape = _solve(scene)
+    _, _, summary, shape = solve_updated(scene)
     table = summary["free_surface"]
     assert table["converged"] and table["history"][0]["free_surface_crossing"] > 0.005
     assert summary["free_surface_crossing"] < 0.001
@@ -546,7 +538,7 @@ def test_an_update_that_cannot_be_made_stops_with_its_reason(monkeypatch):
 
     monkeypatch.setattr(app, "updated_shape", updated)
     scene = load_scene(EXAMPLE2, ["free_surface.update=true"])
-    _, _, summary, shape = _solve(scene)
+    _, _, summary, shape = solve_updated(scene)
     table = summary["free_surface"]
     assert table["updates"] == 1 and not table["converged"] and shape is calls[1]
     assert [w for w in summary["warnings"] if "free surface" in w] == [

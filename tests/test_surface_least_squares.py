@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from forming_fenicsx.app.free_surface import solve_free_surface
-from forming_fenicsx.app.run import completed_summary, run_scene, solve_scene
+from forming_fenicsx.app.run import run_scene, solve_updated
 from forming_fenicsx.config.loader import load_scene
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.post.free_surface import _stations
@@ -105,9 +104,7 @@ def test_the_method_key_is_checked():
 def _updated(method: str):
     scene = load_scene(EXAMPLE2, ["free_surface.update=true", f"free_surface.method={method}",
                                   "output.fields=false", "output.figures=false"])
-    return solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
-        variant, previous=previous, generate=generate, quiet=True, lite=True),
-        complete=lambda *solved: completed_summary(*solved, scene, MPI.COMM_WORLD))[2]
+    return solve_updated(scene)[2]
 
 
 def test_example_2_updated_by_least_squares_as_by_the_flux_level():
@@ -151,9 +148,7 @@ def test_a_sticking_corner_stops_the_least_squares_update_saying_so():
     vanishes. The update stops there and says to use the flux level, which gives 12.8 %."""
     scene = load_scene(DEMOS / "newtonian_extrudate_swell.toml", [
         "free_surface.method=least_squares", "output.fields=false", "output.figures=false"])
-    summary = solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
-        variant, previous=previous, generate=generate, quiet=True, lite=True),
-        complete=lambda *solved: completed_summary(*solved, scene, MPI.COMM_WORLD))[2]
+    summary = solve_updated(scene)[2]
     table = summary["free_surface"]
     assert table["updates"] == 2 and not table["converged"]
     assert 0.13 < table["exit_diameter_change"] < 0.14

@@ -30,8 +30,7 @@ def run_free_surface_case(case: dict[str, Any]) -> dict[str, Any]:
     from mpi4py import MPI
 
     from forming_fenicsx.app.bench_scale import peak_memory_mb
-    from forming_fenicsx.app.free_surface import solve_free_surface
-    from forming_fenicsx.app.run import completed_summary, solve_scene
+    from forming_fenicsx.app.run import solve_scene, solve_updated
     from forming_fenicsx.config.loader import load_scene
 
     scene_file, quantity, settings = SCENES[case["free_surface"]]
@@ -39,9 +38,7 @@ def run_free_surface_case(case: dict[str, Any]) -> dict[str, Any]:
         *settings, "output.fields=false", "output.figures=false",
         f"free_surface.update={'true' if case['update'] else 'false'}"])
     if case["update"]:
-        summary = solve_free_surface(scene, lambda variant, previous, generate: solve_scene(
-            variant, previous=previous, generate=generate, quiet=True, lite=True),
-            complete=lambda *solved: completed_summary(*solved, scene, MPI.COMM_WORLD))[2]
+        summary = solve_updated(scene)[2]
         table = summary["free_surface"]
         solves, wall = table["linear_solves"], table["wall_time_s"]
         extra = {"updates": table["updates"], "settled": table["converged"],

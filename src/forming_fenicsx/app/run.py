@@ -29,6 +29,7 @@ from forming_fenicsx.io.output import (load_velocity, save_velocity, write_die_p
 from forming_fenicsx.io.profile_plot import write_exit_profile_plot
 from forming_fenicsx.io.roll_plot import write_roll_plot
 from forming_fenicsx.io.section_plot import write_section_plot
+from forming_fenicsx.mesh.free_shape import FreeShape
 from forming_fenicsx.mesh.geometry import build_mesh
 from forming_fenicsx.mesh.transfer import transfer
 from forming_fenicsx.post.die import die_profile, die_stresses
@@ -130,6 +131,19 @@ def completed_summary(problem: FlowProblem, result: SolveResult, summary: dict[s
     return summarise(body, result, scene, comm, quiet=True)
 
 
+def solve_updated(scene: Scene, petsc_options: dict[str, Any] | None = None,
+                  comm: MPI.Comm = MPI.COMM_WORLD, stop: Callable[[], str | None] | None = None
+                  ) -> tuple[FlowProblem, SolveResult, dict[str, Any], FreeShape]:
+    """The scene with its free surfaces updated (app/free_surface.solve_free_surface): the flows
+    of shapes that move on with lite summaries, their warnings not logged, the last one's
+    completed (completed_summary)."""
+    return solve_free_surface(
+        scene, lambda variant, previous, generate: solve_scene(
+            variant, petsc_options, comm, stop, previous=previous, generate=generate,
+            quiet=True, lite=True), comm,
+        lambda *solved: completed_summary(*solved, scene, comm))
+
+
 def summarise(body: dict[str, Any], result: SolveResult, scene: Scene, comm: MPI.Comm,
               quiet: bool = False) -> dict[str, Any]:
     """The summary: the sanity checks' warnings and failures first (sanity.py), then whether the run
@@ -223,11 +237,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         if restart is not None:
             raise ValueError("--restart starts one run on the same mesh; free_surface.update "
                              "re-meshes the workpiece at each update: give one or the other")
-        problem, result, summary, shape = solve_free_surface(
-            scene, lambda variant, previous, generate: solve_scene(
-                variant, petsc_options, comm, stop, previous=previous, generate=generate,
-                quiet=True, lite=True), comm,
-            lambda *solved: completed_summary(*solved, scene, comm))
+        problem, result, summary, shape = solve_updated(scene, petsc_options, comm, stop)
         if comm.rank == 0:
             log_warnings(summary["warnings"])
     elif scene.accuracy.target is None:

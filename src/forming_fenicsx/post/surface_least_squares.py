@@ -74,8 +74,10 @@ def least_squares_surface(u: dolfinx.fem.Function, stations: np.ndarray,
         lambda p: np.full(p.shape[1], float(start[1])),
         lambda p: (top if guess is None else guess)(p[0]), axisymmetric,
         FIXED_POINT_TOLERANCE * abs(start[1]))
-    found = height.eval(np.column_stack([stations, np.zeros((len(stations), 2))]),
-                        _cells_of(surface, stations))[:, 0]
+    # the stations are the mesh's vertices: h's degrees of freedom there
+    at = height.function_space.tabulate_dof_coordinates()[:, 0]
+    order = np.argsort(at)
+    found = np.interp(stations, at[order], height.x.array[order])
     found[0] = start[1]
     line = np.column_stack([stations, found])
     return line, None if wall is None else onto_wall(line, wall)
@@ -145,15 +147,6 @@ def _interval_mesh(stations: np.ndarray) -> dolfinx.mesh.Mesh:
     x = mesh.geometry.x
     x[:, 0] = np.interp(x[:, 0], np.linspace(0.0, 1.0, count + 1), stations)
     return mesh
-
-
-def _cells_of(mesh: dolfinx.mesh.Mesh, xs: np.ndarray) -> np.ndarray:
-    """The cell of the interval mesh holding each x (the last one at the end)."""
-    nodes = cell_geometry_nodes(mesh)
-    left = np.min(mesh.geometry.x[nodes, 0], axis=1)
-    order = np.argsort(left)
-    index = np.clip(np.searchsorted(left[order], xs, "right") - 1, 0, len(order) - 1)
-    return order[index].astype(np.int32)
 
 
 class _GaussPoints:
