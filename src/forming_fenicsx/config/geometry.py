@@ -111,6 +111,22 @@ class _Strip:
         return "round" if self.axisymmetric else "strip"
 
     @property
+    def area_ratio(self) -> float:
+        """A1/A0: the exit section over the entry section (of thicknesses for a strip)."""
+        ratio = self.exit_thickness / self.entry_thickness
+        if self.shape == "rectangle":
+            return ratio * self.exit_width / self.entry_width
+        return ratio**2 if self.round else ratio
+
+    @property
+    def ideal_strain(self) -> float:
+        """The equivalent strain of homogeneous deformation through the pass: ln(A0/A1), in plane
+        strain 2/sqrt3 ln(h0/h1)."""
+        if self.shape == "strip":
+            return 2 / math.sqrt(3) * math.log(self.entry_thickness / self.exit_thickness)
+        return -math.log(self.area_ratio)
+
+    @property
     def thinnest(self) -> float:
         """Half-thickness (radius) of the thinnest section (the half model's exit; a 3D bar's
         smaller half-size there)."""

@@ -28,7 +28,8 @@ from forming_fenicsx.config.sections import (ACCURACY_QUANTITIES, D_N_RELATIVE, 
                                              ROLLING_D_N_RELATIVE, ROLLING_D_T_RELATIVE, Accuracy,
                                              Discretisation, FreeSurface, Friction, Output,
                                              Penalty, Process, Scales, Solver, Thermal)
-from forming_fenicsx.config.strain_profile import check_section, read_strain_profile
+from forming_fenicsx.config.strain_profile import (check_section, read_strain_profile,
+                                                   section_mean)
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import TIMES, Units
 from forming_fenicsx.physics.flow_laws import FlowLaw
@@ -216,8 +217,27 @@ class Scene:
 
     @property
     def reference_flow_stress(self) -> float:
-        """sigma_p at the reference strain rate: the stress scale of the process."""
-        return float(self.material.flow_stress([self.reference_strain_rate])[0])
+        """The stress scale of the process (the penalties' sigma0): sigma_p at the reference
+        strain rate; for a hardening law its mean over the pass, from the inflow strain to that
+        plus the ideal strain. An annealed stock's flow stress is the law's value at its strain
+        floor, a tenth of the pass's for annealed copper, and the penalties scaled by it made
+        the answers depend on that floor (docs/hardening.md)."""
+        rate, law = self.reference_strain_rate, self.material
+        if not law.hardens:
+            return float(law.flow_stress([rate])[0])
+        inflow = self.inflow_strain
+        return law.mean_flow_stress(rate, inflow, inflow + self.geometry.ideal_strain)
+
+    @property
+    def inflow_strain(self) -> float:
+        """A hardening law's strain flowing in: initial_strain, or the mean of
+        initial_strain_file's profile over the entry section."""
+        law = self.material
+        if law.initial_strain_file is None:
+            return law.initial_strain
+        key = "material.initial_strain_file"
+        return section_mean(read_strain_profile(law.initial_strain_file, key),
+                            self.geometry.round)
 
     @property
     def scales(self) -> Scales:

@@ -49,3 +49,12 @@ def profile_values(profile: np.ndarray, y: np.ndarray, half_size: float) -> np.n
     """The strain at heights y of a section of ``half_size``, linear between the rows, the profile
     stretched to end where the section does (the sizes agree within 2 %, check_section)."""
     return np.interp(y * profile[-1, 0] / half_size, profile[:, 0], profile[:, 1])
+
+
+def section_mean(profile: np.ndarray, round_section: bool) -> float:
+    """The profile's mean over its section: int eps dy / Y across a strip, 2 int eps y dy / Y^2
+    across a round section of radius Y (trapezoidal between the rows)."""
+    y, strain = profile[:, 0], profile[:, 1]
+    if round_section:
+        return float(2 * np.trapz(strain * y, y) / y[-1] ** 2)
+    return float(np.trapz(strain, y) / y[-1])

@@ -161,6 +161,8 @@ class PowerLaw(_RateFloor):
 # one changes it by 1.4 % over six decades (the paper's alpha of (4.5)).
 RATE_INDEPENDENT_EXPONENT = 1e-3
 RATE_FACTORS = ("none", "power", "log")
+# Gauss-Legendre points per smooth piece of a hardening curve, for its mean over a pass
+MEAN_POINTS = 32
 
 
 @dataclass(frozen=True)
@@ -260,6 +262,23 @@ class _Hardening(_RateFloor):
         floored = np.maximum(rate, self.rate_floor)
         return self._factor(floored, np) * np.minimum(rate / self.rate_floor, 1.0)
 
+    # the strains where H has a kink (Hollomon's floor): the mean over a pass is integrated
+    # piecewise between them
+    kinks: ClassVar[tuple[str, ...]] = ()
+
+    def mean_flow_stress(self, rate: float, low: float, high: float) -> float:
+        """(1/(high - low)) int_low^high sigma_p(rate, eps) d eps: the mean flow stress of a pass
+        that takes the strain from ``low`` to ``high`` (sigma_p(rate, low) when they are equal),
+        by Gauss-Legendre (MEAN_POINTS) on the pieces between the curve's kinks."""
+        if not high > low:
+            return float(self.flow_stress([rate], low)[0])
+        inner = [k for k in (getattr(self, name) for name in self.kinks) if low < k < high]
+        cuts = [low, *inner, high]
+        points, weights = np.polynomial.legendre.leggauss(MEAN_POINTS)
+        integral = sum(0.5 * (b - a) * float(weights @ self.hardening(
+            0.5 * (b - a) * points + 0.5 * (a + b), np)) for a, b in zip(cuts, cuts[1:]))
+        return integral / (high - low) * float(self.rate_factor_value(np.array([rate]))[0])
+
     def flow_stress(self, rate: np.ndarray, strain: np.ndarray | float | None = None,
                     temperature=None) -> np.ndarray:
         """sigma_p(rate, strain[, T]), the strain ``initial_strain`` when not given."""
@@ -331,6 +350,7 @@ class HollomonLaw(_Hardening):
     n: float | None = None
     strain_floor: float = 0.002
     law: str = "hollomon"
+    kinks: ClassVar[tuple[str, ...]] = ("strain_floor",)
 
     def _check_curve(self, section: str) -> None:
         _check_positive(section, "K", self.K)

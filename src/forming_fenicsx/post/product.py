@@ -23,7 +23,7 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
     g = problem.scene.geometry
     if g.mesh_file is not None:
         return {}
-    reduction = 1 - area_ratio(g)
+    reduction = 1 - g.area_ratio
     if problem.rolling:  # the roll gap's shape h_m/L (mean thickness over contact length)
         return {"reduction": reduction, "gap_shape_factor":
                 0.5 * (g.entry_thickness + g.exit_thickness) / g.cone_length}
@@ -33,14 +33,6 @@ def pass_shape(problem: FlowProblem) -> dict[str, float]:
     return {"reduction": reduction,
             "central_burst_indicator": central_burst_indicator(reduction, g.semi_angle,
                                                                symmetry)}
-
-
-def area_ratio(g) -> float:
-    """A1/A0: the exit section over the entry section (of thicknesses for a strip)."""
-    ratio = g.exit_thickness / g.entry_thickness
-    if g.shape == "rectangle":
-        return ratio * g.exit_width / g.entry_width
-    return ratio**2 if g.round else ratio
 
 
 def section_areas(problem: FlowProblem) -> dict[str, float]:
@@ -111,8 +103,7 @@ def hardening_scalars(problem: FlowProblem) -> dict[str, float]:
     g = problem.scene.geometry
     exit_strain, entry_strain = mean_strain_through(problem), mean_strain_through(problem, False)
     gained = exit_strain - entry_strain
-    ideal = (2 / math.sqrt(3) * math.log(g.entry_thickness / g.exit_thickness)
-             if g.shape == "strip" else -math.log(area_ratio(g)))
+    ideal = g.ideal_strain
     rate = problem.equivalent_strain_rate(problem.u)
     work = integrate(problem, problem.flow_stress(problem.u) * rate * problem.dx)
     return {"mean_entry_strain": entry_strain, "mean_exit_strain": exit_strain,
