@@ -43,7 +43,7 @@ def die_stresses(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
     a sticking wall's traction changes sign from node to node (a plug pushed into a sticking
     container: 0.1 to 0.3 MPa of wall shear, oscillating by 55 MPa), the projection of the
     length would show the oscillation and not the stress (docs/free_surface.md)."""
-    found = {"contact_pressure": on_die_nodes(problem, die_pressure(problem), "contact_pressure")}
+    found = contact_pressures(problem)
     if problem.normal_stress_average is not None:
         found["averaged_normal_stress"] = on_die_nodes(
             problem, problem.normal_stress_average.value, "averaged_normal_stress")
@@ -57,6 +57,12 @@ def die_stresses(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
         found["shear_stress"] = on_die_nodes(problem, rolls.shear_along(problem), "shear_stress")
         found["slip"] = on_die_nodes(problem, rolls.slip_along(problem), "slip")
     return found
+
+
+def contact_pressures(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
+    """The contact pressure alone at the nodes of Gamma3 (die_stresses' first entry): all that
+    contact_end_x reads, for a flow that is not post-processed in full."""
+    return {"contact_pressure": on_die_nodes(problem, die_pressure(problem), "contact_pressure")}
 
 
 def on_die_nodes(problem: FlowProblem, expr: Expr, name: str = "f") -> dolfinx.fem.Function:

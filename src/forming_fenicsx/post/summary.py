@@ -9,8 +9,8 @@ from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergen
                                               dissipation_outside_window, divergence_l2,
                                               exit_zone_rate_ratio, free_surface_crossings,
                                               relative_divergence, volume_change)
-from forming_fenicsx.post.die import (contact_end_x, die_contact_fraction, die_profile,
-                                      die_scalars, die_scalars_3d, die_scalars_of)
+from forming_fenicsx.post.die import (contact_end_x, contact_pressures, die_contact_fraction,
+                                      die_profile, die_scalars, die_scalars_3d, die_scalars_of)
 from forming_fenicsx.post.forces import die_separation_force, force_balance, whole_product
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
@@ -99,7 +99,8 @@ def update_scalars(problem: FlowProblem) -> dict[str, float]:
     its last (app/free_surface.py): the x force balance, the crossings, and where the contact with
     the die ends (none on the square die, as scalars)."""
     process, geometry = problem.scene.process, problem.scene.geometry
-    end = ({} if process.kind == "extrusion" and geometry.die == "square" else
-           {"contact_end_x": contact_end_x(problem, die_profile(problem))})
+    square = process.kind == "extrusion" and geometry.die == "square"
+    end = {} if square else {"contact_end_x": contact_end_x(
+        problem, die_profile(problem, contact_pressures(problem)))}
     return {**end, "force_balance_residual": force_balance(problem)[0],
             **crossing_keys(free_surface_crossings(problem))}
