@@ -46,9 +46,10 @@ SOLVER = {"ksp_type": "gmres", "ksp_rtol": 1e-10, "ksp_max_it": 200, "pc_type": 
 # Newton's coupling switches from the relaxed step to the strain in the tangent once the strain
 # changes by less than TANGENT_FROM of its gain (3e-2: the fastest of 1e-2, 3e-2 and 1e-1 on
 # annealed copper; switching at once stops short), or after TANGENT_AFTER relaxed freezes (a
-# relaxed step that never settles: the plane-strain strip); docs/hardening.md
+# relaxed step that never settles: the plane-strain strip, an annealed strip rolled with back
+# tension); docs/hardening.md
 TANGENT_FROM = 3e-2
-TANGENT_AFTER = 12
+TANGENT_AFTER = 8
 
 
 class StrainField:
