@@ -262,9 +262,10 @@ class _Hardening(_RateFloor):
         floored = np.maximum(rate, self.rate_floor)
         return self._factor(floored, np) * np.minimum(rate / self.rate_floor, 1.0)
 
-    # the strains where H has a kink (Hollomon's floor): the mean over a pass is integrated
-    # piecewise between them
-    kinks: ClassVar[tuple[str, ...]] = ()
+    def kinks(self) -> tuple[float, ...]:
+        """The strains where H has a kink (Hollomon's floor): mean_flow_stress integrates
+        piecewise between them."""
+        return ()
 
     def mean_flow_stress(self, rate: float, low: float, high: float) -> float:
         """(1/(high - low)) int_low^high sigma_p(rate, eps) d eps: the mean flow stress of a pass
@@ -272,7 +273,7 @@ class _Hardening(_RateFloor):
         by Gauss-Legendre (MEAN_POINTS) on the pieces between the curve's kinks."""
         if not high > low:
             return float(self.flow_stress([rate], low)[0])
-        inner = [k for k in (getattr(self, name) for name in self.kinks) if low < k < high]
+        inner = [k for k in self.kinks() if low < k < high]
         cuts = [low, *inner, high]
         points, weights = np.polynomial.legendre.leggauss(MEAN_POINTS)
         integral = sum(0.5 * (b - a) * float(weights @ self.hardening(
@@ -350,7 +351,6 @@ class HollomonLaw(_Hardening):
     n: float | None = None
     strain_floor: float = 0.002
     law: str = "hollomon"
-    kinks: ClassVar[tuple[str, ...]] = ("strain_floor",)
 
     def _check_curve(self, section: str) -> None:
         _check_positive(section, "K", self.K)
@@ -361,6 +361,9 @@ class HollomonLaw(_Hardening):
 
     def hardening(self, strain, lib):
         return self.K * lib.maximum(strain, self.strain_floor) ** self.n
+
+    def kinks(self) -> tuple[float, ...]:
+        return (self.strain_floor,)
 
 
 @dataclass(frozen=True)
