@@ -248,17 +248,18 @@ def test_pass_schedule_demo_carries_the_strain(shared_tmp):
 
 
 def test_hot_rolling_cools_the_strip_at_the_rolls():
-    """demos/hot_strip_rolling.toml as it is (19 linear solves, 14 with Coulomb's cap at k off;
+    """demos/hot_strip_rolling.toml as it is (12 linear solves, 14 with Coulomb's cap at k off;
     14 on a 2 mm mesh): the strip leaves below its 450 C inflow at the surface (the 100 C rolls:
-    429 C) and above it inside (the deformation heat: 453 C); the heat balance (5e-5) and the
-    rolls' power against heat out plus work stored (1.9e-3) close."""
+    429 C) and above it inside (the deformation heat: 453 C); the heat balance (5.4e-5; 3.0e-4
+    while the friction heat read the last secant iterate's slip) and the rolls' power against
+    heat out plus work stored (2.0e-3) close."""
     scene = load_scene(DEMOS / "hot_strip_rolling.toml", ["output.fields=false"])
     summary = solve_scene(scene)[2]
     inflow = scene.thermal.inflow_temperature
     assert summary["converged"] and summary["linear_solves"] <= 20
     assert summary["min_exit_temperature"] < inflow - 10 < inflow < summary["max_exit_temperature"]
     assert summary["min_temperature"] > scene.thermal.die_temperature
-    assert abs(summary["energy_balance"]["residual"]) < 0.01
+    assert abs(summary["energy_balance"]["residual"]) < 1e-3
     assert abs(summary["energy_balance_residual"]) < 0.01
     assert 0 < summary["neutral_angle"] < summary["bite_angle"]
 

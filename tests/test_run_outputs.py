@@ -204,3 +204,20 @@ def test_a_run_leaves_no_petsc_options_behind():
     solve_scene(load_scene(DEMO, ["discretisation.mesh_size=1.0", "solver.method=newton",
                                   "discretisation.averaging=quadrature", "output.fields=false"]))
     assert set(PETSc.Options().getAll()) == before
+
+
+def test_summary_json_takes_numpy_scalars(tmp_path):
+    """A free surface that settled on a numpy comparison (np.bool_) crashed the new user's CSV-die
+    drawing run after it had converged ("Object of type bool_ is not JSON serializable"): numpy
+    scalars are written as Python's, non-finite floats as null."""
+    import numpy as np
+
+    from forming_fenicsx.io.output import write_summary
+
+    path = tmp_path / "summary.json"
+    write_summary(path, {"free_surface": {"converged": np.bool_(True), "move": np.float64(2.5),
+                                          "history": [{"updates": np.int64(3)}]},
+                         "ratio": np.float64(np.nan), "plain": 1.5})
+    assert json.loads(path.read_text()) == {
+        "free_surface": {"converged": True, "move": 2.5, "history": [{"updates": 3}]},
+        "ratio": None, "plain": 1.5}

@@ -97,7 +97,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             log.info("free surface after %d updates: crossing %.3g %%, the next update moves it "
                      "%.3g of the exit half-size", moved, 100 * summary["free_surface_crossing"],
                      move)
-        converged = move < settings.tolerance
+        converged = bool(move < settings.tolerance)
         if (converged or moved == settings.max_updates) and drafted():  # the last shape: its
             # flow finished, and the shape judged again on it
             problem, result, summary = finished()

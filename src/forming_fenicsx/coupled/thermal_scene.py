@@ -12,7 +12,7 @@ from mpi4py import MPI
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.coupled.thermal import (FieldExpression, FrictionHeat, HeatExchange,
                                              TemperatureField, ThermalMaterial)
-from forming_fenicsx.physics.friction import tangential
+from forming_fenicsx.physics.friction import slip_coefficient, tangential
 
 CONTAINER = max(ROLES.values()) + 1  # the facet tag of the container wall, split from gamma3
 
@@ -41,8 +41,11 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     (Gamma3) and container exchanges, the air on the free surfaces (Gamma2, Gamma4) when air_h > 0,
     friction heat on the contact when the flow has friction, Q_k of the flow's degree.
     ``plastic_power`` defaults to the flow law's sigma(rate(v)) rate(v) (the isothermal law: a
-    temperature-dependent law passes its own), ``friction_power`` to c_T |v_T|^2 with the flow's
-    slip coefficient (friction.py). ``temperature``: the flow's own T Function when its law reads
+    temperature-dependent law passes its own), ``friction_power`` to tau_f |v_T|^2 / sqrt(|v_T|^2 + d_T^2),
+    the regularised friction's power at v itself (friction.py; not the flow's slip coefficient,
+    which the secant iterates update and Newton's steps do not: read during Newton it was a
+    start's, zero slip when Newton started from a converged flow, and its tau_f / d_T heated a hot
+    extrusion's die face to 10^5 K). ``temperature``: the flow's own T Function when its law reads
     it (the field then solves into it)."""
     thermal, problem_roles = problem.scene.thermal, problem.roles
     tags = container_tags(problem)
@@ -59,9 +62,12 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     def flow_power(v, T):
         return problem.flow_stress(v) * problem.equivalent_strain_rate(v)
 
-    def slip_power(v, T):
-        slip = tangential(problem.slip(v), problem.n)
-        return problem.friction_coefficient() * ufl.dot(slip, slip)
+    def slip_power(v, T):  # tau_f |s|^2 / sqrt(|s|^2 + d_T^2): the regularised law's at v itself
+        slip = problem.slip(v)
+        tangent = tangential(slip, problem.n)
+        coefficient = slip_coefficient(problem.friction_bound(), slip, problem.n,
+                                       problem.scene.friction.d_T)
+        return coefficient * ufl.dot(tangent, tangent)
     friction = None
     if problem.has_friction:
         friction = FrictionHeat(friction_power or slip_power, tuple(contact + container),

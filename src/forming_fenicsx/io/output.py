@@ -17,8 +17,10 @@ from forming_fenicsx.core.units import Units
 
 
 def json_safe(value: Any) -> Any:
-    """``value`` with every non-finite float (nested in dicts and lists) replaced by None: valid
-    JSON."""
+    """``value`` with every numpy scalar made a Python one and every non-finite float (nested in
+    dicts and lists) replaced by None: valid JSON."""
+    if isinstance(value, np.generic):
+        value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
