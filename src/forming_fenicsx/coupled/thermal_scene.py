@@ -41,12 +41,10 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     (Gamma3) and container exchanges, the air on the free surfaces (Gamma2, Gamma4) when air_h > 0,
     friction heat on the contact when the flow has friction, Q_k of the flow's degree.
     ``plastic_power`` defaults to the flow law's sigma(rate(v)) rate(v) (the isothermal law: a
-    temperature-dependent law passes its own), ``friction_power`` to tau_f |v_T|^2 / sqrt(|v_T|^2 + d_T^2),
-    the regularised friction's power at v itself (friction.py; not the flow's slip coefficient,
-    which the secant iterates update and Newton's steps do not: read during Newton it was a
-    start's, zero slip when Newton started from a converged flow, and its tau_f / d_T heated a hot
-    extrusion's die face to 10^5 K). ``temperature``: the flow's own T Function when its law reads
-    it (the field then solves into it)."""
+    temperature-dependent law passes its own), ``friction_power`` to the regularised friction's
+    power at v itself, tau_f |v_T|^2 / sqrt(|v_T|^2 + d_T^2) (friction.py; not with the flow's
+    slip coefficient, which Newton's steps do not update: docs/thermal.md). ``temperature``: the
+    flow's own T Function when its law reads it (the field then solves into it)."""
     thermal, problem_roles = problem.scene.thermal, problem.roles
     tags = container_tags(problem)
     contact = [ROLES["gamma3_contact"]] if "gamma3_contact" in problem_roles else []

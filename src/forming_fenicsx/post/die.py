@@ -120,9 +120,12 @@ def die_scalars_of(problem: FlowProblem, profile: dict[str, np.ndarray] | None
     where the workpiece leaves the die (last node of Gamma3 with positive contact pressure, from
     ``profile``: die_profile's, on rank 0; None on the other ranks). Collective."""
     g, x = problem.scene.geometry, ufl.SpatialCoordinate(problem.mesh)
-    start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(math.radians(g.die_angle))
-    cone = 1.0 if g.mesh_file else ufl.conditional(
-        ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
+    cone: Expr | float = 1.0  # a user's mesh: all of Gamma3 (it has no die angle nor entry)
+    if not g.mesh_file:
+        start = g.die_entry + problem.scene.output.die_entry_trim * math.cos(
+            math.radians(g.die_angle))
+        cone = ufl.conditional(
+            ufl.And(ufl.ge(x[0], start), ufl.le(x[0], g.die_entry + g.cone_length)), 1.0, 0.0)
     zone = _zone(problem, die_pressure(problem), cone)
     return {"mean_die_pressure": zone["mean_die_pressure"],
             "contact_length": zone["contact_length"],
