@@ -74,7 +74,10 @@ def test_friction_factor_below_avitzur_bound():
 
 def test_aluminium_rod_demo(shared_tmp):
     """demos/aluminium_rod.toml as shipped (hot AA6063, 50 -> 20 mm through a 45 deg die with an
-    entry radius and a bearing): Newton in at most 15 solves (measured 11) with no sanity warning;
+    entry radius and a bearing): Newton in at most 15 solves (measured 11), warned of one thing:
+    the friction factor's m k on the bearing, which the rod leaves (its pressure is zero there),
+    pulls back on the pass by about 12 % of the ram pressure (the free surface's update, which
+    releases the bearing, measured 102.94 MPa against 116.96, 12 % less; docs/sanity.md);
     the ram force is the ram pressure over the billet's pi R0^2 in N; the ram pressure over the
     ideal work at the process rate's flow stress between 2 and 5 (measured 3.43: the strain rates in
     the die are far above U/H, and redundant work and friction add to the ideal work); the
@@ -87,7 +90,11 @@ def test_aluminium_rod_demo(shared_tmp):
     summary = run_scene(scene, shared_tmp / "aluminium_rod")
     sigma0 = summary["scales"]["flow_stress"]
     assert summary["converged"] and summary["linear_solves"] <= 15
-    assert summary["warnings"] == []
+    assert len(summary["warnings"]) == 1
+    assert "the friction factor's m k acts where the extruded rod does not press on the die" \
+        in summary["warnings"][0] and "x = 55)" in summary["warnings"][0]
+    share = summary["unpressed_friction_force_x"] / (summary["ram_force"] * 0.16)
+    assert 0.08 < share < 0.16
     assert summary["ram_force"] == pytest.approx(summary["ram_pressure"] * math.pi * 25.0**2,
                                                  rel=1e-9)
     assert summary["units"]["quantities"]["ram_force"] == "N"

@@ -137,3 +137,24 @@ def test_a_molten_workpiece_is_refused_before_any_work():
                          "thermal": {"heat_capacity": 3.4, "conductivity": 390.0,
                                      "inflow_temperature": 1400.0, "solidus": 1356.0}})
     assert error.value.key == "thermal.inflow_temperature"
+
+
+def test_the_friction_factor_on_an_unpressed_die_warns():
+    """The factor law's m k on a land the product does not press on: its x-force over the
+    product's section against the answer, a warning above 1 % (drawing: over the drawing force;
+    extrusion: over the ram force times A1/A0), silent at 0 (Coulomb friction, a die pressed
+    everywhere). Example 2's strip (A1/A0 = 1.5/1.625) with its drawing force 70 x 0.75."""
+    drawn = {**NORMAL, "drawing_force": 52.5, "contact_end_x": 3.6}
+    scene = scene_from_dict({"process": {"kind": "drawing"}, "friction": {"law": "factor",
+                                                                          "m": 0.5}})
+    checks = {f.check: f for f in check_run({**drawn, "unpressed_friction_force_x": 1.05}, scene)}
+    warned = checks["unpressed_friction"]
+    assert not warned.failure and "about 2 % of the drawing stress" in warned.message
+    assert "x = 3.6" in warned.message and "free_surface.update = true" in warned.message
+    quiet = {f.check for f in check_run({**drawn, "unpressed_friction_force_x": 0.5}, scene)}
+    assert "unpressed_friction" not in quiet | {f.check for f in check_run(drawn, scene)}
+    pushed = scene_from_dict({"process": {"kind": "extrusion"},
+                              "friction": {"law": "factor", "m": 0.5}})
+    extruded = {**NORMAL, "ram_force": 30.0, "unpressed_friction_force_x": 0.6}
+    message = {f.check: f for f in check_run(extruded, pushed)}["unpressed_friction"].message
+    assert "about 4 % of the ram pressure" in message  # 0.6 / (30 x 5/10)

@@ -43,6 +43,18 @@ def die_forces_x(problem: FlowProblem) -> tuple[float, float]:
     return normal, integrate(problem, -problem.friction_traction()[0] * ds)
 
 
+def unpressed_friction_x(problem: FlowProblem) -> float:
+    """x-force of the friction factor's m k on the die where the workpiece does not press on it
+    (its contact pressure is zero): the fixed domain holds the workpiece on Gamma3 where it would
+    leave it (a land or bearing), and the factor law, unlike Coulomb's mu p, does not vanish with
+    the pressure. 0 for Coulomb friction and without friction."""
+    if not (problem.has_contact and problem.has_friction) \
+            or problem.scene.friction.law != "factor":
+        return 0.0
+    unpressed = ufl.conditional(ufl.le(problem.contact_pressure(problem.u), 0.0), 1.0, 0.0)
+    return integrate(problem, -problem.friction_traction()[0] * unpressed * problem.ds_contact)
+
+
 def die_separation_force(problem: FlowProblem, component: int = 1) -> float:
     """The force that pushes the die apart: the y-traction of the workpiece on the die (contact
     pressure p n_y plus the friction stress's y part) integrated over Gamma3 with the coordinate
@@ -84,7 +96,8 @@ def force_balance(problem: FlowProblem) -> tuple[float, float, float, float, flo
 
 # forces on the whole product (the model's times CoordinateSystem.whole and the strip's width)
 PRODUCT_FORCES = ("ram_force", "drawing_force", "die_force_x", "die_normal_force_x",
-                  "die_friction_force_x", "applied_force_x", "roll_power")
+                  "die_friction_force_x", "unpressed_friction_force_x", "applied_force_x",
+                  "roll_power")
 # forces and torques on each die half or roll, which the half model holds whole
 EACH_TOOL = ("die_separation_force", "die_side_force", "roll_force", "roll_torque")
 # the energy balance's ratios; its other terms are powers, scaled as the forces

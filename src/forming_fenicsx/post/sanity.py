@@ -18,6 +18,7 @@ correct and broken runs):
 | drawing stress / yield stress of the drawn product | 0.9 | 0.99 |
 | exit_zone_rate_ratio (product deforming after the die) | | 0.1 |
 | free_surface_crossing | 5 % | 20 % |
+| factor friction where the die is not pressed, over the product's section / answer | 1 % | |
 | die_contact_fraction | | 0 (no contact at all) |
 | estimated linear-solve error / solver.tolerance | 1 % | |
 | force_balance_residual (x forces of the driving face, the die and Gamma5) | 1 % | 5 % |
@@ -42,6 +43,7 @@ VOLUME_CHANGE = (0.01, 0.05)
 DRAWING_LIMIT = (0.9, 0.99)
 EXIT_ZONE_RIGID = 0.1
 FREE_SURFACE = (0.05, 0.2)
+UNPRESSED_FRICTION = 0.01
 ABOVE_RATE2 = 0.1
 BELOW_FLOOR = 0.5
 FORCE_BALANCE = (0.01, 0.05)
@@ -196,6 +198,35 @@ def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "like the mesh size: refine discretisation.mesh_size)" + _update_hint(scene))
 
 
+def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """The friction factor's m k on the die where the workpiece does not press on it (a land or
+    bearing the product would leave): its x-force taken over the product's section, the back
+    pull it puts on the pass, against the answer (drawing: that force over the drawing force;
+    extrusion: over the ram force times A1/A0)."""
+    force = summary.get("unpressed_friction_force_x", 0.0)
+    if not force > 0:
+        return None
+    drawing = scene.process.kind == "drawing"
+    share = force / (summary["drawing_force"] if drawing
+                     else summary["ram_force"] * scene.geometry.area_ratio)
+    if not share > UNPRESSED_FRICTION:
+        return None
+    product = product_name(scene)
+    end = summary.get("contact_end_x")
+    where = f"; the contact ends at x = {end:.4g}" if end is not None and math.isfinite(end) \
+        else ""
+    answer = "drawing stress" if drawing else "ram pressure"
+    hint = "" if _update_hint(scene) == "" else (
+        "; free_surface.update = true lets the contact decide where the product leaves the die "
+        "(docs/free_surface.md)")
+    return Finding("unpressed_friction",
+                   f"the friction factor's m k acts where the {product} does not press on the die "
+                   f"(its contact pressure is zero there{where}): that friction's force over the "
+                   f"{product}'s section is about {100 * share:.2g} % of the {answer}. The fixed "
+                   f"domain holds the {product} on the die where it would leave it, and the factor "
+                   "law, unlike Coulomb's mu p, does not vanish with the pressure" + hint)
+
+
 def _update_hint(scene: Scene) -> str:
     """Where the free-surface update applies and is off: the surfaces it can move (the stock's
     too before a drawing die)."""
@@ -347,6 +378,7 @@ def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> 
     found += [f for f in (compressibility(summary, scene, found),) if f is not None]
     found += drawability(summary, scene, found)
     found += heat(summary, scene)
-    found += [f for f in (free_surfaces(summary, scene), solve_accuracy(summary, scene),
-                          force_balance(summary, scene)) if f is not None]
+    found += [f for f in (free_surfaces(summary, scene), unpressed_friction(summary, scene),
+                          solve_accuracy(summary, scene), force_balance(summary, scene))
+              if f is not None]
     return found
