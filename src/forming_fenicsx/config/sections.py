@@ -18,8 +18,8 @@ PROCESSES = ("extrusion", "drawing", "rolling")
 
 @dataclass
 class Process:
-    """What is formed and how: the process velocity u_N^0 on Gamma1 (2.5) and the force F_N on
-    Gamma5 (2.7).
+    """What is formed and how: the process velocity u_N^0 on Gamma1 (2.5) and the normal stress
+    F_N on Gamma5 (2.7), positive pulling the face outward.
 
     ``drive`` says where the velocity is prescribed: "pull" at the exit face (drawing), "push" at
     the entry face (extrusion's ram). F_N acts on the other end face, which is free without it.
