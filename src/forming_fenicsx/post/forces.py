@@ -48,11 +48,23 @@ def unpressed_friction_x(problem: FlowProblem) -> float:
     (its contact pressure is zero): the fixed domain holds the workpiece on Gamma3 where it would
     leave it (a land or bearing), and the factor law, unlike Coulomb's mu p, does not vanish with
     the pressure. 0 for Coulomb friction and without friction."""
-    if not (problem.has_contact and problem.has_friction) \
-            or problem.scene.friction.law != "factor":
+    if not factor_friction(problem):
         return 0.0
-    unpressed = ufl.conditional(ufl.le(problem.contact_pressure(problem.u), 0.0), 1.0, 0.0)
-    return integrate(problem, -problem.friction_traction()[0] * unpressed * problem.ds_contact)
+    return integrate(problem, -problem.friction_traction()[0] * unpressed(problem)
+                     * problem.ds_contact)
+
+
+def factor_friction(problem: FlowProblem) -> bool:
+    """Whether the die (or roll) has the friction factor's law, whose m k does not vanish with the
+    contact pressure."""
+    return problem.has_contact and problem.has_friction \
+        and problem.scene.friction.law == "factor"
+
+
+def unpressed(problem: FlowProblem) -> ufl.core.expr.Expr:
+    """1 where the contact pressure on Gamma3 is zero (the workpiece does not press on the die),
+    else 0."""
+    return ufl.conditional(ufl.le(problem.contact_pressure(problem.u), 0.0), 1.0, 0.0)
 
 
 def die_separation_force(problem: FlowProblem, component: int = 1) -> float:
@@ -99,7 +111,8 @@ PRODUCT_FORCES = ("ram_force", "drawing_force", "die_force_x", "die_normal_force
                   "die_friction_force_x", "unpressed_friction_force_x", "applied_force_x",
                   "roll_power")
 # forces and torques on each die half or roll, which the half model holds whole
-EACH_TOOL = ("die_separation_force", "die_side_force", "roll_force", "roll_torque")
+EACH_TOOL = ("die_separation_force", "die_side_force", "roll_force", "roll_torque",
+             "unpressed_friction_torque")
 # the energy balance's ratios; its other terms are powers, scaled as the forces
 BALANCE_RATIOS = ("residual", "global_residual")
 

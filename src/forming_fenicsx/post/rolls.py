@@ -18,6 +18,7 @@ import ufl
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.physics.friction import tangential
+from forming_fenicsx.post.forces import factor_friction, unpressed
 from forming_fenicsx.post.integrals import integrate
 
 
@@ -117,7 +118,12 @@ def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) ->
     x_gap = g.die_exit
     angle = (math.degrees(math.asin(min(1.0, (x_gap - neutral) / R))) if math.isfinite(neutral)
              else math.nan)
-    return {"roll_torque": balance["roll_power"] * R / v_R,
+    # the friction factor's share of the torque where the strip does not press on the roll
+    unpressed_torque = {} if not factor_friction(problem) else {
+        "unpressed_friction_torque": integrate(problem, ufl.dot(
+            problem.friction_traction(), problem.tool_velocity) * unpressed(problem)
+            * problem.ds_contact) * R / v_R}
+    return {"roll_torque": balance["roll_power"] * R / v_R, **unpressed_torque,
             "roll_power": balance["roll_power"],
             "entry_speed": v0, "exit_speed": v1, "forward_slip": v1 / v_R - 1.0,
             "neutral_x": neutral, "neutral_angle": angle,

@@ -203,6 +203,8 @@ def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
     bearing the product would leave): its x-force taken over the product's section, the back
     pull it puts on the pass, against the answer (drawing: that force over the drawing force;
     extrusion: over the ram force times A1/A0)."""
+    if scene.process.kind == "rolling":
+        return _unpressed_roll(summary)
     force = summary.get("unpressed_friction_force_x", 0.0)
     if not force > 0:
         return None
@@ -225,6 +227,22 @@ def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    f"{product}'s section is about {100 * share:.2g} % of the {answer}. The fixed "
                    f"domain holds the {product} on the die where it would leave it, and the factor "
                    "law, unlike Coulomb's mu p, does not vanish with the pressure" + hint)
+
+
+def _unpressed_roll(summary: dict[str, Any]) -> Finding | None:
+    """Rolling's: the friction factor's torque where the strip does not press on the roll (the
+    end of the arc it leaves at its exit thickness) against the roll torque."""
+    torque, total = summary.get("unpressed_friction_torque", 0.0), summary["roll_torque"]
+    share = abs(torque) / abs(total) if total else 0.0
+    if not share > UNPRESSED_FRICTION:
+        return None
+    return Finding("unpressed_friction",
+                   "the friction factor's m k acts where the rolled strip does not press on the "
+                   "rolls (its contact pressure is zero there, near the exit): that friction's "
+                   f"torque is about {100 * share:.2g} % of the roll torque. The roll gap holds "
+                   "the strip on the rolls there, and the factor law, unlike Coulomb's mu p, does "
+                   "not vanish with the pressure: Coulomb friction (friction.law = \"coulomb\", "
+                   "capped at k by default) gives none there")
 
 
 def _update_hint(scene: Scene) -> str:
