@@ -218,7 +218,7 @@ def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
     where = f"; the contact ends at x = {end:.4g}" if end is not None and math.isfinite(end) \
         else ""
     answer = "drawing stress" if drawing else "ram pressure"
-    hint = "" if _update_hint(scene) == "" else (
+    hint = "" if not _update_applies(scene) else (
         "; free_surface.update = true lets the contact decide where the product leaves the die "
         "(docs/free_surface.md)")
     return Finding("unpressed_friction",
@@ -245,12 +245,18 @@ def _unpressed_roll(summary: dict[str, Any]) -> Finding | None:
                    "capped at k by default) gives none there")
 
 
+def _update_applies(scene: Scene) -> bool:
+    """Whether the free-surface update can move this scene's surfaces and is off (2D, the
+    scene's own geometry, not rolling)."""
+    g = scene.geometry
+    return not (scene.free_surface.update or g.three_dimensional or g.mesh_file is not None
+                or scene.process.kind == "rolling")
+
+
 def _update_hint(scene: Scene) -> str:
     """Where the free-surface update applies and is off: the surfaces it can move (the stock's
     too before a drawing die)."""
-    g = scene.geometry
-    if scene.free_surface.update or g.three_dimensional or g.mesh_file is not None \
-            or scene.process.kind == "rolling":
+    if not _update_applies(scene):
         return ""
     surfaces = ("the stock's and the product's surfaces streamlines"
                 if scene.process.kind == "drawing" else "the product's surface a streamline")
