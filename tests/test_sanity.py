@@ -162,15 +162,15 @@ def test_the_friction_factor_on_an_unpressed_die_warns():
 
 def test_the_friction_factor_on_an_unpressed_roll_warns():
     """Rolling's share: the friction factor's torque where the strip does not press on the roll
-    over the roll torque (measured 14 % on a hot AA6060 strip at m = 0.7, docs/sanity.md)."""
+    over the roll torque (measured 8.0 % on a hot AA6060 strip at m = 0.7, docs/sanity.md)."""
     scene = scene_from_dict({"process": {"kind": "rolling"},
                              "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6,
                                           "roll_radius": 100.0},
                              "friction": {"law": "factor", "m": 0.7}})
     rolled = {**NORMAL, "roll_torque": 8.13e7, "neutral_angle": 3.3, "bite_angle": 8.6,
               "forward_slip": 0.076}
-    found = {f.check: f for f in check_run({**rolled, "unpressed_friction_torque": -1.15e7},
+    found = {f.check: f for f in check_run({**rolled, "unpressed_friction_torque": -6.49e6},
                                            scene)}
-    assert "about 14 % of the roll torque" in found["unpressed_friction"].message
+    assert "about 8 % of the roll torque" in found["unpressed_friction"].message
     assert "unpressed_friction" not in {
         f.check for f in check_run({**rolled, "unpressed_friction_torque": -5e5}, scene)}
