@@ -174,3 +174,29 @@ def test_the_friction_factor_on_an_unpressed_roll_warns():
     assert "about 8 % of the roll torque" in found["unpressed_friction"].message
     assert "unpressed_friction" not in {
         f.check for f in check_run({**rolled, "unpressed_friction_torque": -5e5}, scene)}
+
+
+def test_a_back_tension_near_the_stocks_yield_stress_is_named():
+    """A drawing's back tension over the stock's yield stress in tension: silent at 0.75, a
+    warning (and the cause a stopped run leads its reason with) above 0.8; above 1 a failure for a
+    stock that does not harden (it stretches without end), a warning for one that hardens (it
+    stretches until it carries the tension: the annealed steel wire converged at 1.04)."""
+    scene = scene_from_dict({"process": {"kind": "drawing", "applied_force": 100.0}})
+
+    def checked(summary: dict, converged: bool = True) -> dict:
+        return {f.check: f for f in check_run({**NORMAL, **summary}, scene, converged)}
+
+    assert "stock_yield" not in checked({"stock_yield_ratio": 0.75})
+    warned = checked({"stock_yield_ratio": 0.943})["stock_yield"]
+    assert not warned.failure and warned.cause and "0.943 times" in warned.message
+    assert "2k)" in warned.message  # Example 2's strip: plane strain, no hardening
+    found = checked({"stock_yield_ratio": 1.05})
+    assert found["stock_yield"].failure and "no steady drawing" in found["stock_yield"].message
+    hardening = {"stock_yield_ratio": 1.05, "mean_entry_strain": 0.0}
+    found = checked(hardening)
+    assert not found["stock_yield"].failure
+    assert "until it hardens" in found["stock_yield"].message
+    assert "2k at its entry strain" in found["stock_yield"].message
+    assert "free_surface.update" in found["stock_yield"].message
+    stopped = checked(hardening, converged=False)
+    assert "free_surface.update" not in stopped["stock_yield"].message

@@ -269,7 +269,10 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
     elif scene.output.figures:
         write_figures(problem, out, heading, profile)
     profiles = []  # (file stem, summary/units key, profile, label, reference level)
-    if problem.strain is not None:  # a hardening law: the product's strain (hardness) profile
+    # a hardening law: the product's strain (hardness) profile; not of an iteration that stopped,
+    # whose strain may be NaN and whose streamlines are no flow's (an annealed steel wire's ran
+    # back and forth for 25 minutes before this, docs/outputs.md)
+    if problem.strain is not None and result.converged:
         ideal = summary["mean_entry_strain"] + summary["ideal_strain"]
         across = (exit_section_values(problem, problem.strain) if three_d
                   else exit_strain_profile(problem))

@@ -41,6 +41,7 @@ PENETRATION = (0.01, 0.05)
 COMPRESSIBLE = (0.1, 0.5)
 VOLUME_CHANGE = (0.01, 0.05)
 DRAWING_LIMIT = (0.9, 0.99)
+STOCK_YIELD = (0.8, 1.0)     # back tension over the stock's yield stress in tension
 EXIT_ZONE_RIGID = 0.1
 FREE_SURFACE = (0.05, 0.2)
 UNPRESSED_FRICTION = 0.01
@@ -137,6 +138,37 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
                    f"{100 * change:.3g} % of the throughput (volume_change) and ||div u||/||e(u)|| "
                    f"= {value:.2g}; the velocities and volumes are those of a compressible "
                    f"material. Cause: {'; '.join(causes)}", failure=failed)
+
+
+def stock_yield(summary: dict[str, Any], scene: Scene, converged: bool = True
+                ) -> Finding | None:
+    """A drawing's back tension (process.applied_force > 0 on the entry face) against the stock's
+    yield stress in tension at its entry strain (2k in plane strain, sigma0 for a round or 3D bar).
+    Near it the stock narrows before the die, which the fixed domain does not follow (an annealed
+    steel wire: the stock's crossing 1.3 % without tension, 3.8 % at 0.91; at 0.94 its Newton
+    iteration stopped as ill-conditioned on one mesh, docs/sanity.md). Above it a hardening stock
+    stretches until it carries the tension; a stock that does not harden yields without end (no
+    steady drawing: a failure). A cause: a run that stops is explained by it first (without the
+    free-surface hint: its first solve is this one)."""
+    ratio = summary.get("stock_yield_ratio", math.nan)
+    if not ratio > STOCK_YIELD[0]:
+        return None
+    plane = scene.geometry.symmetry == "plane_strain"
+    hardening = summary.get("mean_entry_strain") is not None
+    limit = ("2k" if plane else "sigma0") + (" at its entry strain" if hardening else "")
+    failed = ratio > STOCK_YIELD[1] and not hardening
+    tail = ("it yields under it and, not hardening, stretches without end: no steady drawing "
+            "exists" if failed else
+            "it yields under it and stretches before the die until it hardens to carry it"
+            if ratio > STOCK_YIELD[1] else "it narrows before the die, close to yielding")
+    return Finding("stock_yield",
+                   f"the back tension process.applied_force = {scene.process.applied_force:.4g} is "
+                   f"{ratio:.3g} times the yield stress in tension of the stock ({limit}): {tail}. "
+                   "The fixed domain keeps the stock's size, and near this limit the iteration may "
+                   f"not converge: lower the back tension (below {STOCK_YIELD[0]:g} of that "
+                   "stress) or draw a stronger stock (material.initial_strain)"
+                   + ("" if failed or not converged else _update_hint(scene)),
+                   failure=failed, cause=True)
 
 
 def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
@@ -399,7 +431,8 @@ def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> 
     found += rate_window(summary, scene)
     found += [f for f in (die_penetration(summary, scene, converged), die_contact(summary, scene))
               if f is not None]
-    found += [f for f in (compressibility(summary, scene, found),) if f is not None]
+    found += [f for f in (compressibility(summary, scene, found),
+                          stock_yield(summary, scene, converged)) if f is not None]
     found += drawability(summary, scene, found)
     found += heat(summary, scene)
     found += [f for f in (free_surfaces(summary, scene), unpressed_friction(summary, scene),

@@ -63,9 +63,13 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
                    **pass_shape(problem)}
     else:
         stress = force / exit_section(problem)
-        strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
+        tensile = problem.coordinates.tensile_yield_factor
+        strength = tensile * product_flow_stress(problem)
+        back = problem.scene.process.applied_force or 0.0  # a back tension pulls the stock
         process = {"drawing_force": force, "drawing_stress": stress,
                    "product_yield_ratio": stress / strength,
+                   **({"stock_yield_ratio": back / (tensile * product_flow_stress(problem, False))}
+                      if back > 0 else {}),
                    **die_numbers(problem), **pass_shape(problem)}
     if three_d:
         process.update(section_areas(problem))
