@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from forming_fenicsx.core.units import Units, bracketed
 from forming_fenicsx.io.figure import Heading, colour_range, plain_ticks, pyplot, save
 from forming_fenicsx.post.facet_samples import FacetSamples
@@ -18,7 +20,8 @@ def write_section_plot(samples: FacetSamples, path: Path, heading: Heading, labe
     """exit_<quantity>.png (rank 0): ``samples`` of the exit face (views3d.exit_face), mirrored
     about y = 0 and z = 0 as ``mirrored`` says (the model's symmetry planes Gamma6 and Gamma7),
     the symmetry planes dashed; the title gives the least and largest value and ``reference``
-    (label, value: the entry strain plus the ideal strain)."""
+    (label, value: the entry strain plus the ideal strain). Triangles with a NaN value (a
+    strain left out, views3d.strain_undershoot) are left blank."""
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
     points, triangles, values = samples.merged(lambda p: p[:, [2, 1]])
@@ -28,7 +31,8 @@ def write_section_plot(samples: FacetSamples, path: Path, heading: Heading, labe
     signs = [(sz, sy) for sz in ((1, -1) if mirrored[1] else (1,))
              for sy in ((1, -1) if mirrored[0] else (1,))]
     for sz, sy in signs:
-        mapped = ax.tripcolor(sz * points[:, 0], sy * points[:, 1], triangles, shown,
+        mapped = ax.tripcolor(sz * points[:, 0], sy * points[:, 1], triangles,
+                              np.nan_to_num(shown), mask=np.isnan(shown)[triangles].any(axis=1),
                               shading="gouraud", cmap=SECTION_MAP, vmin=low, vmax=high)
     for on, line in zip(mirrored, (ax.axhline, ax.axvline), strict=True):
         if on:
@@ -41,7 +45,7 @@ def write_section_plot(samples: FacetSamples, path: Path, heading: Heading, labe
     plain_ticks(ax)
     x = float(samples.points[..., 0].mean())
     length = units.label("length")
-    levels = f"min {float(shown.min()):.4g}, max {float(shown.max()):.4g}"
+    levels = f"min {float(np.nanmin(shown)):.4g}, max {float(np.nanmax(shown)):.4g}"
     if reference is not None:
         levels += f"; {reference[0]} = {float(units.shown(dimension, reference[1])[0]):.4g}"
     heading.put(ax, f"{label} over the exit section x = {x:.4g}{' ' + length if length else ''}"

@@ -74,3 +74,23 @@ def exit_section_values(problem: FlowProblem, function: dolfinx.fem.Function
     order = np.lexsort((keys[:, 1], keys[:, 0]))
     return {"y": points[order, 0], "z": points[order, 1], "values": values[order],
             "samples": samples}
+
+
+def strain_undershoot(section: dict[str, object] | None, entry: float, comm: MPI.Comm
+                      ) -> tuple[int, float]:
+    """The nodes of the exit section (exit_section_values' ``section``, rank 0) where the
+    transported strain lies below the stock's entry strain ``entry``: no strain falls along a
+    streamline, so these are the transport's undershoot (SUPG at the die edge's corner streamline,
+    docs/strain_transport.md), not strains. They are set to NaN in the section's values and its
+    samples (exit_strain.csv and .png leave them out). Their count and least value on every rank
+    (collective)."""
+    found = (0, np.nan)
+    if section is not None:
+        floor = entry - 1e-6 * max(1.0, abs(entry))
+        for values in (section["values"], section["samples"].values):
+            below = values < floor
+            if values is section["values"]:
+                found = (int(np.count_nonzero(below)),
+                         float(values[below].min()) if below.any() else np.nan)
+            values[below] = np.nan
+    return comm.bcast(found, root=0)
