@@ -234,8 +234,9 @@ def test_hardening_writes_the_strain_over_the_exit_section(shared_tmp, monkeypat
     # NaN in the values and the samples, and a blank in the figure, whose least is the next one
     section = exit_section_values(problem, problem.strain)
     least = np.sort(strain)
-    count, value = strain_undershoot(section, 0.5 * (least[0] + least[1]), MPI.COMM_WORLD)
-    assert count == np.count_nonzero(strain == least[0]) and value == pytest.approx(least[0])
+    count = np.count_nonzero(strain == least[0])
+    note = strain_undershoot(section, 0.5 * (least[0] + least[1]), MPI.COMM_WORLD)
+    assert f"at {count} node(s) of the exit section (least {least[0]:.4g})" in note
     if RANK0:
         assert np.isnan(section["values"]).sum() == count
         assert np.isnan(section["samples"].values).any()

@@ -277,18 +277,12 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         ideal = summary["mean_entry_strain"] + summary["ideal_strain"]
         across = (exit_section_values(problem, problem.strain) if three_d
                   else exit_strain_profile(problem))
-        if three_d:
-            entry = getattr(scene.material, "initial_strain", 0.0)
-            count, least = strain_undershoot(across, entry, comm)
-            if count:
-                note = (f"the transported strain lies below the stock's entry strain ({entry:g}) "
-                        f"at {count} node(s) of the exit section (least {least:.4g}): the "
-                        "transport's undershoot where the die's edges shear the bar's corner "
-                        "(docs/strain_transport.md), not a strain; exit_strain.csv and .png leave "
-                        "them out (NaN)")
-                summary["warnings"].append(note)
-                if comm.rank == 0:
-                    log_warnings([note])
+        note = strain_undershoot(across, getattr(scene.material, "initial_strain", 0.0),
+                                 comm) if three_d else ""
+        if note:
+            summary["warnings"].append(note)
+            if comm.rank == 0:
+                log_warnings([note])
         profiles.append(("exit_strain", "equivalent_strain", across, "equivalent strain",
                          ("entry strain + ideal ln(A0/A1)", ideal)))
     temperature = problem.field("temperature")

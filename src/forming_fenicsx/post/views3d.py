@@ -76,21 +76,24 @@ def exit_section_values(problem: FlowProblem, function: dolfinx.fem.Function
             "samples": samples}
 
 
-def strain_undershoot(section: dict[str, object] | None, entry: float, comm: MPI.Comm
-                      ) -> tuple[int, float]:
+def strain_undershoot(section: dict[str, object] | None, entry: float, comm: MPI.Comm) -> str:
     """The nodes of the exit section (exit_section_values' ``section``, rank 0) where the
     transported strain lies below the stock's entry strain ``entry``: no strain falls along a
     streamline, so these are the transport's undershoot (SUPG at the die edge's corner streamline,
     docs/strain_transport.md), not strains. They are set to NaN in the section's values and its
-    samples (exit_strain.csv and .png leave them out). Their count and least value on every rank
-    (collective)."""
+    samples (exit_strain.csv and .png leave them out). Returns the warning that says so ("" when
+    there are none), on every rank (collective)."""
     found = (0, np.nan)
     if section is not None:
         floor = entry - 1e-6 * max(1.0, abs(entry))
-        for values in (section["values"], section["samples"].values):
-            below = values < floor
-            if values is section["values"]:
-                found = (int(np.count_nonzero(below)),
-                         float(values[below].min()) if below.any() else np.nan)
-            values[below] = np.nan
-    return comm.bcast(found, root=0)
+        below = section["values"] < floor
+        found = (int(np.count_nonzero(below)),
+                 float(section["values"][below].min()) if below.any() else np.nan)
+        section["values"][below] = np.nan
+        section["samples"].values[section["samples"].values < floor] = np.nan
+    count, least = comm.bcast(found, root=0)
+    return "" if not count else (
+        f"the transported strain lies below the stock's entry strain ({entry:g}) at {count} "
+        f"node(s) of the exit section (least {least:.4g}): the transport's undershoot where the "
+        "die's edges shear the bar's corner (docs/strain_transport.md), not a strain; "
+        "exit_strain.csv and .png leave them out (NaN)")
