@@ -11,12 +11,11 @@ import ufl
 from mpi4py import MPI
 from ufl.core.expr import Expr
 
-from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.fem.projection import LumpedProjector
 from forming_fenicsx.mesh.geometry import die_coordinate
 from forming_fenicsx.post import rolls
 from forming_fenicsx.post.contact_zone import facet_integrals, zone_scalars
+from forming_fenicsx.post.die_nodes import PRESSED, on_die_nodes
 from forming_fenicsx.post.integrals import integrate
 
 
@@ -63,13 +62,6 @@ def contact_pressures(problem: FlowProblem) -> dict[str, dolfinx.fem.Function]:
     """The contact pressure alone at the nodes of Gamma3 (die_stresses' first entry): all that
     contact_end_x reads, for a flow that is not post-processed in full."""
     return {"contact_pressure": on_die_nodes(problem, die_pressure(problem), "contact_pressure")}
-
-
-def on_die_nodes(problem: FlowProblem, expr: Expr, name: str = "f") -> dolfinx.fem.Function:
-    """A quantity on Gamma3 at the nodes of P1: its lumped projection over Gamma3 (zero at the
-    nodes elsewhere)."""
-    target = dolfinx.fem.Function(function_space(problem.mesh, "P", 1), name=name)
-    return LumpedProjector(expr, target, problem.full_degree, problem.ds_contact).project()
 
 
 def die_profile(problem: FlowProblem, stresses: dict[str, dolfinx.fem.Function] | None = None
@@ -139,7 +131,7 @@ def contact_end_x(problem: FlowProblem, profile: dict[str, np.ndarray] | None) -
     end = None
     if profile is not None:
         pressure = profile["contact_pressure"]
-        pressed = pressure > 1e-9 * max(pressure.max(), 1e-300)
+        pressed = pressure > PRESSED * max(pressure.max(), 1e-300)
         end = float(profile["x"][pressed].max()) if pressed.any() else float("nan")
     return problem.comm.bcast(end, root=0)
 

@@ -6,14 +6,12 @@ from __future__ import annotations
 
 from typing import Any
 
-import dolfinx.fem
 import ufl
 from mpi4py import MPI
 
-from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.fem.projection import LumpedProjector
+from forming_fenicsx.post.die_nodes import PRESSED, on_die_nodes
 from forming_fenicsx.post.integrals import integrate
 
 
@@ -67,15 +65,14 @@ def factor_friction(problem: FlowProblem) -> bool:
 
 def unpressed(problem: FlowProblem) -> ufl.core.expr.Expr:
     """1 where the contact pressure on Gamma3 at its nodes (P1, its lumped projection over Gamma3,
-    as die.csv's) is zero, below 1e-9 of its largest as contact_end_x reads it (the workpiece does
-    not press on the die), else 0. Not the pressure at the quadrature points: along a pressed die
-    it can oscillate through zero from point to point (a copper rod through a cosine CSV die, mean
-    pressure 540 MPa: 15 % of Gamma3's points, a false 8 % share; docs/sanity.md)."""
-    pressure = dolfinx.fem.Function(function_space(problem.mesh, "P", 1))
-    LumpedProjector(problem.contact_pressure(problem.u), pressure, problem.full_degree,
-                    problem.ds_contact).project()
+    as die.csv's) is zero, not above PRESSED of its largest as contact_end_x reads it (the
+    workpiece does not press on the die), else 0. Not the pressure at the quadrature points:
+    along a pressed die it can oscillate through zero from point to point (a copper rod through a
+    cosine CSV die, mean pressure 540 MPa: 15 % of Gamma3's points, a false 8 % share;
+    docs/sanity.md)."""
+    pressure = on_die_nodes(problem, problem.contact_pressure(problem.u))
     largest = problem.comm.allreduce(float(pressure.x.array.max(initial=0.0)), op=MPI.MAX)
-    return ufl.conditional(ufl.le(pressure, 1e-9 * largest), 1.0, 0.0)
+    return ufl.conditional(ufl.le(pressure, PRESSED * largest), 1.0, 0.0)
 
 
 def die_separation_force(problem: FlowProblem, component: int = 1) -> float:

@@ -82,15 +82,15 @@ def product_top(problem: FlowProblem, x: float) -> float:
     return half if low >= half * (1 - 1e-8) else float(low)
 
 
-def product_flow_stress(problem: FlowProblem, exit: bool = True) -> float:
+def product_flow_stress(problem: FlowProblem, leaving: bool = True) -> float:
     """The drawn product's flow stress at the process strain rate: at its mean exit strain for a
-    hardening law (``exit`` False: the stock's, at its mean entry strain), the scene's reference
+    hardening law (``leaving`` False: the stock's, at its mean entry strain), the scene's reference
     flow stress otherwise."""
     scene = problem.scene
     if problem.strain is None:
         return scene.reference_flow_stress
-    strain = mean_strain_through(problem, exit)
-    if not exit and not math.isfinite(strain):  # an iterate that stopped with a NaN strain: the
+    strain = mean_strain_through(problem, leaving)
+    if not leaving and not math.isfinite(strain):  # an iterate that stopped with a NaN strain: the
         strain = getattr(scene.material, "initial_strain", 0.0)  # stock's prescribed one
     return float(scene.material.flow_stress([scene.reference_strain_rate], strain)[0])
 
