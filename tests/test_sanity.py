@@ -62,6 +62,18 @@ def test_ill_conditioned_solves_warn():
     assert not findings(solve_error_estimate=1e-5)["solve_accuracy"].failure
 
 
+def test_the_force_balance_advice_fits_a_stopped_iteration():
+    """An annealed steel wire drawn at 0.94 of its stock's yield stress stopped ill-conditioned
+    with its x forces 4.7 % apart, and was told to set solver.force_tolerance "so the iteration
+    goes on until they balance": it had not converged at all (docs/sanity.md)."""
+    converged = findings(force_balance_residual=0.047)["force_balance"].message
+    assert "solver.force_tolerance" in converged and "stopped" not in converged
+    stopped = {f.check: f for f in check_run({**NORMAL, "force_balance_residual": 0.047}, SCENE,
+                                             converged=False)}["force_balance"].message
+    assert "4.7 %" in stopped and "iteration stopped before they balance" in stopped
+    assert "force_tolerance" not in stopped and "direct" not in stopped
+
+
 def test_the_penetration_advice_fits_the_contact_settings():
     """Issue 34: an unconverged Newton run with the default augmented contact was told to "leave
     penalty.d_N out and penalty.augmented at its default", which it did."""

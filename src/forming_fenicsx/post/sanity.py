@@ -344,16 +344,20 @@ def solve_accuracy(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "friction.d_T_relative)")
 
 
-def force_balance(summary: dict[str, Any], scene: Scene) -> Finding | None:
+def force_balance(summary: dict[str, Any], scene: Scene, converged: bool = True
+                  ) -> Finding | None:
     """The x forces on the workpiece must balance (verification.md): a driving force that differs
-    from the die's by percents is not the force of this flow, whatever the increment says."""
+    from the die's by percents is not the force of this flow, whatever the increment says. An
+    iteration that stopped did not get there: its reason, not the tolerance, says what to change."""
     value = summary["force_balance_residual"]
-    fix = ("Set solver.force_tolerance (e.g. 1e-3) so the iteration goes on until they balance"
+    fix = ("The iteration stopped before they balance: what its reason advises comes first"
+           if not converged else
+           "Set solver.force_tolerance (e.g. 1e-3) so the iteration goes on until they balance"
            if scene.solver.force_tolerance == 0 else "Lower solver.force_tolerance")
     return _graded("force_balance", value, FORCE_BALANCE,
                    f"the x forces do not balance: |driving + applied - die| is {100 * value:.3g} % "
                    "of the driving force, so the reported forces and stresses are not those of one "
-                   f"flow. {fix}, or try solver.method = \"direct\"")
+                   f"flow. {fix}" + (", or try solver.method = \"direct\"" if converged else ""))
 
 
 def _temperature(kelvin: float) -> str:
@@ -436,6 +440,6 @@ def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> 
     found += drawability(summary, scene, found)
     found += heat(summary, scene)
     found += [f for f in (free_surfaces(summary, scene), unpressed_friction(summary, scene),
-                          solve_accuracy(summary, scene), force_balance(summary, scene))
+                          solve_accuracy(summary, scene), force_balance(summary, scene, converged))
               if f is not None]
     return found
