@@ -213,3 +213,31 @@ def test_annealed_strip_answer_does_not_hang_on_the_strain_floor():
         answers.append(summary)
     for key in ("roll_force", "roll_torque"):
         assert answers[1][key] == pytest.approx(answers[0][key], rel=5e-3), key
+
+
+def test_a_square_die_hardening_runaway_is_not_reported_as_an_answer():
+    """A new user's scene: annealed copper (Hollomon, prestrained 0.3) extruded as a strip 60 ->
+    20 mm through a square die, m = 0.5, mm and MPa. Its Newton iteration converged (44 solves on
+    one rank) at 2061 MPa with the strain 37.6 at the die's corner, 29 times the ideal strain,
+    and below -29 in the dead zone's corner: the material near the container slowed, hardened and
+    the flow turned away from it, from the entry on. The same pass without hardening at the law's
+    mean flow stress over it (rate_power, A = 296.26 MPa) gives 742.4 MPa; every square-die
+    hardening variant measured ran away (docs/hardening.md). The run now fails, naming it."""
+    from forming_fenicsx.app.run import solve_scene
+
+    def extruded(material: dict) -> dict:
+        return solve_scene(scene_from_dict({
+            "process": {"kind": "extrusion", "velocity": 2.0},
+            "geometry": {"entry_thickness": 60.0, "exit_thickness": 20.0},
+            "material": material, "friction": {"law": "factor", "m": 0.5},
+            "solver": {"method": "newton"},
+            "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
+            "output": {"fields": False, "figures": False}}), quiet=True)[2]
+
+    hardening = extruded({"name": "copper_annealed", "initial_strain": 0.3})
+    assert not hardening["converged"]
+    assert "the transported strain reaches" in hardening["reason"]
+    assert (hardening["max_strain"] - 0.3) / hardening["ideal_strain"] > 10.0
+    assert hardening["min_strain"] < 0.0
+    plain = extruded({"law": "rate_power", "A": 296.26, "n": 0.001})
+    assert plain["converged"] and hardening["ram_pressure"] > 2.0 * plain["ram_pressure"]

@@ -212,3 +212,31 @@ def test_a_back_tension_near_the_stocks_yield_stress_is_named():
     assert "free_surface.update" in found["stock_yield"].message
     stopped = checked(hardening, converged=False)
     assert "free_surface.update" not in stopped["stock_yield"].message
+
+
+def test_a_hardening_strain_that_runs_away_is_named():
+    """A hardening law's largest strain gained against the ideal strain ln(A0/A1): at most 4.4
+    times it on the demos and their variants (a cold rod at m = 0.8), silent there; a warning above
+    5, a failure (and a cause) above 10: annealed copper through a square die converged with 29
+    times it at the die's corner and twice the ram pressure (test_hardening.py). A strain below the
+    entry's by more than half the ideal strain (-29.5 there) warns of the transport's
+    undershoot."""
+    scene = scene_from_dict({"process": {"kind": "extrusion"},
+                             "material": {"name": "copper_annealed", "initial_strain": 0.3},
+                             "units": {"length": "mm", "time": "s", "stress": "MPa"}})
+    hardening = {"ideal_strain": 1.27, "max_strain": 0.3 + 4.4 * 1.27, "max_strain_at": [3, 4],
+                 "min_strain": 0.3 - 0.4 * 1.27}
+
+    def checked(**changed) -> dict:
+        return {f.check: f for f in check_run({**NORMAL, **hardening, **changed}, scene)}
+
+    assert not {"strain_runaway", "strain_undershoot"} & set(checked())
+    warned = checked(max_strain=0.3 + 6 * 1.27)["strain_runaway"]
+    assert not warned.failure and warned.cause and "6 times" in warned.message
+    failed = checked(max_strain=37.59, max_strain_at=[59.94, 10.12])["strain_runaway"]
+    assert failed.failure and "reaches 37.6 at (59.94, 10.12), 29.4 times" in failed.message
+    assert f"A = {scene.reference_flow_stress:.4g}, n = 0.001" in failed.message
+    under = checked(min_strain=-29.5)["strain_undershoot"]
+    assert not under.failure and "falls to -29.5" in under.message
+    plastic = {f.check for f in check_run({**NORMAL, "max_strain": 99.0}, SCENE)}
+    assert "strain_runaway" not in plastic  # no ideal strain: no hardening law

@@ -58,6 +58,7 @@ DIMENSIONS = {
     "roll_force": "force_per_width", "roll_torque": "torque_per_width",
     "roll_power": "power_per_width", "entry_speed": "velocity", "exit_speed": "velocity",
     "neutral_x": "length", "shear_stress": "stress", "slip": "velocity",
+    "max_strain_at": "length",
 }
 # a quantity per unit width of a strip, and what it is for the strip of a given width
 WHOLE = {"force_per_width": "force", "torque_per_width": "torque", "power_per_width": "power"}

@@ -1,7 +1,8 @@
 """How far a run can be trusted, measured on its flow: the volume change the penalty leaves
 (Theorem 3.1), the flow into the die and across the free surfaces that the fixed-domain model
-(2.6) lets through, a product that still deforms after the die, and the work done outside the
-law's rate window. The sanity checks (sanity.py) grade these numbers of the summary."""
+(2.6) lets through, a product that still deforms after the die, the work done outside the
+law's rate window, and a hardening law's strain beyond what the pass can give. The sanity checks
+(sanity.py) grade these numbers of the summary."""
 from __future__ import annotations
 
 import math
@@ -101,6 +102,25 @@ def exit_zone_rate_ratio(problem: FlowProblem) -> float:
     mean = integrate(problem, rate * problem.dx) / integrate(problem, 1.0 * problem.dx)
     zone_mean = integrate(problem, rate * zone * problem.dx) / integrate(problem, zone * problem.dx)
     return zone_mean / mean if mean > 0 else math.nan
+
+
+def strain_extremes(problem: FlowProblem) -> dict[str, float | list[float]]:
+    """A hardening law's transported strain at its nodes: its largest value and where it lies,
+    and its smallest. Strain only grows along a streamline, from the entry strain to about the
+    ideal ln(A0/A1) above it (times the redundant work); far more marks material that barely moves
+    and keeps straining, below the entry strain the transport's undershoot (docs/hardening.md).
+    Collective."""
+    if problem.strain is None:
+        return {}
+    eps = problem.strain
+    owned = eps.function_space.dofmap.index_map.size_local
+    values = eps.x.array[:owned]
+    where = eps.function_space.tabulate_dof_coordinates()[:owned, :problem.mesh.geometry.dim]
+    top = int(np.argmax(values)) if owned else -1
+    local = (float(values[top]), where[top].tolist()) if owned else (-math.inf, [])
+    largest, at = max(problem.comm.allgather(local), key=lambda item: item[0])
+    smallest = problem.comm.allreduce(float(values.min(initial=math.inf)), op=MPI.MIN)
+    return {"max_strain": largest, "max_strain_at": at, "min_strain": smallest}
 
 
 def dissipation_outside_window(problem: FlowProblem) -> dict[str, float]:

@@ -17,6 +17,8 @@ correct and broken runs):
 | volume_change (volume gained or lost / throughput), penalty formulation | 1 % | 5 % |
 | drawing stress / yield stress of the drawn product | 0.9 | 0.99 |
 | exit_zone_rate_ratio (product deforming after the die) | | 0.1 |
+| a hardening law's largest strain gained / the ideal strain ln(A0/A1) | 5 | 10 |
+| a hardening law's strain below the entry strain / the ideal strain | 0.5 | |
 | free_surface_crossing | 5 % | 20 % |
 | factor friction where the die is not pressed, over the product's section / answer | 1 % | |
 | die_contact_fraction | | 0 (no contact at all) |
@@ -43,6 +45,8 @@ VOLUME_CHANGE = (0.01, 0.05)
 DRAWING_LIMIT = (0.9, 0.99)
 STOCK_YIELD = (0.8, 1.0)     # back tension over the stock's yield stress in tension
 EXIT_ZONE_RIGID = 0.1
+STRAIN_GAINED = (5.0, 10.0)  # the largest strain gained over the ideal strain
+STRAIN_UNDERSHOOT = 0.5      # the entry strain less the smallest, over the ideal strain
 FREE_SURFACE = (0.05, 0.2)
 UNPRESSED_FRICTION = 0.01
 ABOVE_RATE2 = 0.1
@@ -169,6 +173,47 @@ def stock_yield(summary: dict[str, Any], scene: Scene, converged: bool = True
                    "stress) or draw a stronger stock (material.initial_strain)"
                    + ("" if failed or not converged else _update_hint(scene)),
                    failure=failed, cause=True)
+
+
+def strain_runaway(summary: dict[str, Any], scene: Scene) -> list[Finding]:
+    """A hardening law's transported strain against what the pass gives: about the ideal strain
+    ln(A0/A1) above the entry strain (at most 4.4 times it on the demos and their variants, a cold
+    rod at m = 0.8). Far above it, material that barely moves (a dead zone, a surface held by
+    friction) keeps straining in the steady state, grows harder than the flow around it, and the
+    flow turns away from it: annealed copper through a square die converged at 2061 MPa, where the
+    law without hardening at the pass's mean flow stress gives 581 (docs/hardening.md). A cause: a
+    run that stops is explained by it first. Below the entry strain: the transport's undershoot,
+    where the law reads its strain floor's stress."""
+    if "max_strain" not in summary or not summary.get("ideal_strain", 0.0) > 0:
+        return []
+    ideal, entry = summary["ideal_strain"], scene.inflow_strain
+    found = []
+    gained = (summary["max_strain"] - entry) / ideal
+    at = ", ".join(f"{value:.4g}" for value in summary["max_strain_at"])
+    if gained > STRAIN_GAINED[0]:
+        failed = gained > STRAIN_GAINED[1]
+        found.append(Finding(
+            "strain_runaway",
+            f"the transported strain reaches {summary['max_strain']:.3g} at ({at}), {gained:.3g} "
+            f"times the pass's ideal strain {ideal:.3g} above the entry's {entry:.3g}: material "
+            "that barely moves (a dead zone, or a surface held by friction) keeps straining in a "
+            "steady state, grows harder than the flow around it, and the flow turns away from it. "
+            + ("The flow and the forces are those of that runaway, not of the process"
+               if failed else "The flow and the forces may be those of that runaway")
+            + " (docs/hardening.md). Model the pass without hardening at the law's mean flow "
+            f"stress over it (material.law = \"rate_power\", A = {scene.reference_flow_stress:.4g}"
+            ", n = 0.001), or with a die that leaves no dead zone (a smaller die angle, less "
+            "friction)", failure=failed, cause=True))
+    under = (entry - summary["min_strain"]) / ideal
+    if under > STRAIN_UNDERSHOOT:
+        found.append(Finding(
+            "strain_undershoot",
+            f"the transported strain falls to {summary['min_strain']:.3g}, below the entry's "
+            f"{entry:.3g} by {under:.3g} times the pass's ideal strain {ideal:.3g}: the "
+            "transport's undershoot where the flow stagnates (a dead zone's corner), where the "
+            "law reads its strain floor's stress, softer than the metal. Its effect on the "
+            "forces is not measured: compare a run on a finer mesh"))
+    return found
 
 
 def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> list[Finding]:
@@ -437,6 +482,7 @@ def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> 
               if f is not None]
     found += [f for f in (compressibility(summary, scene, found),
                           stock_yield(summary, scene, converged)) if f is not None]
+    found += strain_runaway(summary, scene)
     found += drawability(summary, scene, found)
     found += heat(summary, scene)
     found += [f for f in (free_surfaces(summary, scene), unpressed_friction(summary, scene),

@@ -8,7 +8,8 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergence,
                                               dissipation_outside_window, divergence_l2,
                                               exit_zone_rate_ratio, free_surface_crossings,
-                                              relative_divergence, volume_change)
+                                              relative_divergence, strain_extremes,
+                                              volume_change)
 from forming_fenicsx.post.die import (contact_end_x, contact_pressures, die_contact_fraction,
                                       die_profile, die_scalars, die_scalars_3d, die_scalars_of)
 from forming_fenicsx.post.forces import (die_separation_force, factor_friction, force_balance,
@@ -76,6 +77,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
     return whole_product(problem, {
         **process,
         **hardening_scalars(problem),
+        **strain_extremes(problem),
         **thermal_scalars(problem, process),
         "die_force_x": die_normal + die_friction,
         "die_separation_force": die_separation_force(problem),
