@@ -15,6 +15,7 @@ import forming_fenicsx.app.study as study
 from forming_fenicsx.app.cli import main
 from forming_fenicsx.io.figure import Heading
 from forming_fenicsx.app.study.figures import quantity_plots
+from forming_fenicsx.app.study.report import write_csv
 from forming_fenicsx.core.units import Units
 
 DEMOS = Path(__file__).parents[1] / "demos"
@@ -194,3 +195,31 @@ def test_a_parameter_that_is_not_a_number_is_plotted_by_name_without_optimum(sha
         path = quantity_plots(shared_tmp, rows, ["drawing_stress"], ["friction.law"], optima,
                               Units(), False)[0]
         assert path.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_warned_runs_are_marked_in_the_report_and_the_plot(tmp_path, monkeypatch):
+    """A new user's die-angle sweep of a copper wire printed free-surface warnings for the 15 and
+    20 degree runs without saying whose they were, and study.md showed those runs' drawing
+    stresses like the others'. The table counts each run's warnings, lists them by the run's
+    settings, study.csv counts them, and the plot rings a warned run."""
+    warning = "6.86 % of the throughput crosses the free surfaces of the fixed domain (2.6)"
+    rows = [_row(a, "0.1", v, 1.0) for a, v in (("6", 3.0), ("9", 2.0), ("15", 2.5))]
+    for row in rows:
+        row["warnings"] = [warning] if row["settings"]["geometry.die_angle"] == "15" else []
+    study.references(rows, ["drawing_stress"])
+    keys = list(rows[0]["settings"])
+    optima = study.find_optima(rows, ["drawing_stress"], keys)
+    text = study.report(rows, ["drawing_stress"], optima)
+    assert "| converged | warnings | wall s |" in text
+    assert [line.split(" | ")[4] for line in text.splitlines()[2:5]] == ["-", "-", "1"]
+    assert f"- die_angle = 15, mesh_size = 0.1: {warning}" in text
+    write_csv(tmp_path / "study.csv", rows, ["drawing_stress"], keys)
+    counted = [line.split(",")[-4] for line in (tmp_path / "study.csv").read_text().splitlines()]
+    assert counted == ["warnings", "0", "0", "1"]
+    saved = []
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig",
+                        lambda fig, path, **kw: saved.append(fig))
+    quantity_plots(tmp_path, rows, ["drawing_stress"], keys, optima, Units(), False)
+    ringed = [line for line in saved[0].axes[0].get_lines()
+              if line.get_label().startswith("warned")]
+    assert len(ringed) == 1 and list(ringed[0].get_xdata()) == [15.0]

@@ -175,7 +175,9 @@ def _main(argv: list[str] | None) -> int:
             if comm.rank == 0:
                 print((out / "study.md").read_text())
                 figures = ", ".join(sorted(p.name for p in out.glob("*.png")))
-                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged; "
+                warned = sum(bool(r.get("warnings")) for r in rows)
+                print(f"{len(rows)} runs, {sum(r['converged'] for r in rows)} converged, "
+                      f"{warned} with warnings (study.md lists them); "
                       f"{out}/study.json, study.csv, study.md{', ' + figures if figures else ''}")
             return 0
         accuracy = [accuracy_override(args.accuracy)] if getattr(args, "accuracy", None) else []

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from forming_fenicsx.app.study.analysis import (MESH_KEYS, is_design_key, positions, relative_error,
-                                                series)
+                                                series, value)
 from forming_fenicsx.core.numbers import is_number
 from forming_fenicsx.core.units import Units
 
@@ -44,7 +44,8 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
     """<quantity>.png for each quantity: its converged values against the first design key, one
     line per setting of the other keys, the reference per design point (dashed) where there is
     one, and each line's interior optimum (a star at the vertex of the dotted parabola through the
-    least value and its neighbours)."""
+    least value and its neighbours); a converged run with sanity warnings ringed in red (its
+    numbers may be off: study.md lists the warnings)."""
     plt = _pyplot()
     parameter = next(k for k in keys if is_design_key(k))
     name = parameter.split(".")[-1].replace("_", " ")
@@ -68,6 +69,12 @@ def quantity_plots(out: Path, rows: list[dict[str, Any]], quantities: list[str],
                         color=drawn.get_color(), markeredgecolor="k",
                         label=f"optimum {optimum['location']:.4g}: {optimum['value']:.4g}")
         where = positions(rows, parameter)
+        warned = [(where[r["settings"][parameter]], value(r, quantity)) for r in rows
+                  if r["converged"] and r.get("warnings")]
+        if warned:
+            ax.plot(*zip(*warned, strict=True), "o", markersize=13, markerfacecolor="none",
+                    markeredgecolor="tab:red", linestyle="none",
+                    label="warned: its numbers may be off (study.md)")
         if not all(is_number(v) for v in where):  # categories: their names at their places
             ax.set_xticks(list(where.values()), list(where))
         ax.set_xlabel(parameter_label(parameter, units))

@@ -1,4 +1,4 @@
-"""A study's report: study.md (runs, optima, the cheapest settings) and study.csv."""
+"""A study's report: study.md (runs, optima, the cheapest settings, the warnings) and study.csv."""
 from __future__ import annotations
 import math
 from pathlib import Path
@@ -19,8 +19,9 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
            whole_forces: bool = False) -> str:
     """Markdown: every run (a design study's in parameter order, a speed-accuracy study's by wall
     time) with its quantities, their errors and references where there are any, whether it
-    converged and its cost; a design study's interior optima; the cheapest converged setting per
-    error level (per design point) where a reference exists."""
+    converged, how many sanity warnings it has, and its cost; a design study's interior optima;
+    the cheapest converged setting per error level (per design point) where a reference exists;
+    each warned run's warnings, by its settings."""
     units = units or Units()
     keys = list(rows[0]["settings"]) if rows else []
     design = any(is_design_key(k) for k in keys)
@@ -29,7 +30,7 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
     for q in quantities:
         header += [_unit_label(units, q, whole_forces)]
         header += ["error", "reference"] if q in measured else []
-    header += ["converged", "wall s", "linear solves", "dofs"]
+    header += ["converged", "warnings", "wall s", "linear solves", "dofs"]
     lines = []
     for r in rows if design else sorted(rows, key=lambda r: r["wall_time_s"]):
         line = [str(r["settings"][k]) for k in keys]
@@ -39,7 +40,8 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
                 error = relative_error(r, q)
                 line += [f"{100 * error:.2f}%", r["reference"][q]["kind"]] if math.isfinite(error) \
                     else ["-", "none"]
-        lines.append([*line, "yes" if r["converged"] else "no", f"{r['wall_time_s']:.2f}",
+        lines.append([*line, "yes" if r["converged"] else "no",
+                      len(r.get("warnings", [])) or "-", f"{r['wall_time_s']:.2f}",
                       r["linear_solves"], r["dofs"]])
     parts = [markdown_table(None, header, lines)]
     if design:
@@ -49,7 +51,19 @@ def report(rows: list[dict[str, Any]], quantities: list[str],
     elif not design:
         parts.append("No reference: errors need an exact value or at least three mesh sizes "
                      "(discretisation.mesh_size or mesh_size_relative, halved each time).")
+    parts.append(_warnings_list(rows, keys))
     return "\n\n".join(p for p in parts if p)
+
+
+def _warnings_list(rows: list[dict[str, Any]], keys: list[str]) -> str:
+    """The sanity warnings of the runs that have any, by their settings (the numbers of a warned
+    run may be off: docs/outputs.md)."""
+    def named(settings: dict[str, str]) -> str:
+        return ", ".join(f"{k.split('.')[-1]} = {settings[k]}" for k in keys)
+
+    items = [f"- {named(r['settings'])}: {warning}" for r in rows
+             for warning in r.get("warnings", [])]
+    return "\n".join(["Warnings (the numbers of these runs may be off):", *items]) if items else ""
 
 
 def _optima_table(optima: list[dict[str, Any]], units: Units, whole_forces: bool) -> str:
@@ -97,7 +111,7 @@ def write_csv(path: Path, rows: list[dict[str, Any]], quantities: list[str],
         columns.append(q)
         if q in measured:
             columns += [f"{q}_reference", f"{q}_reference_kind", f"{q}_relative_error"]
-    tail = ["converged", "wall_time_s", "linear_solves", "dofs"]
+    tail = ["converged", "warnings", "wall_time_s", "linear_solves", "dofs"]
     tail += ["output"] if "output" in rows[0] else []
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
@@ -109,4 +123,5 @@ def write_csv(path: Path, rows: list[dict[str, Any]], quantities: list[str],
                 if q in measured:
                     found = row["reference"][q]
                     line += [found["value"], found["kind"], found["relative_error"]]
-            writer.writerow(line + [row.get(c) for c in tail])
+            writer.writerow(line + [len(row.get("warnings", [])) if c == "warnings" else row.get(c)
+                                    for c in tail])
