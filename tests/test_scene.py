@@ -107,6 +107,9 @@ BAD = [
      "material.C", "does not apply"),
     # a key of the other die (a new user's wedge extrusion without geometry.die)
     ({"geometry": {"die_angle": 45.0}}, "geometry.die_angle", "set geometry.die = 'conical'"),
+    # a new user's square bar (the mission's "square sections"): the rectangle named
+    ({"geometry": {"symmetry": "3d", "section": "square"}}, "geometry.section",
+     'a square bar is a rectangle: section = "rectangle" with entry_width = entry_height'),
     ({"discretisation": {"element": "Q3"}}, "discretisation.element", "Q1, Q2"),
     ({"discretisation": {"mesh_size": 3.0}}, "discretisation.mesh_size", "thinnest"),
     ({"discretisation": {"corner_grading": 0.5}}, "discretisation.corner_grading", "[1, 1000]"),

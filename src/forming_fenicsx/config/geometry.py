@@ -100,8 +100,11 @@ class _Strip:
         if self.section is None:
             self.section = "rectangle"
         if self.section not in SECTIONS:
+            square = ('; a square bar is a rectangle: section = "rectangle" with entry_width = '
+                      'entry_height and exit_width = exit_height'
+                      if str(self.section).lower() == "square" else "")
             raise SceneError("geometry.section",
-                             f"must be one of {', '.join(SECTIONS)}; got {self.section!r}")
+                             f"must be one of {', '.join(SECTIONS)}; got {self.section!r}{square}")
 
     @property
     def shape(self) -> str:
