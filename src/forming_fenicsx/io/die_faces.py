@@ -15,9 +15,10 @@ from forming_fenicsx.core.units import bracketed
 from forming_fenicsx.io.figure import Heading, colour_range, plain_ticks, pyplot, save
 from forming_fenicsx.post.facet_samples import FacetSamples
 
-# each stress shown (die.py: die_stresses), its label and perceptually uniform colour map
-SHOWN = {"contact_pressure": ("contact pressure -sigma_N", "viridis"),
-         "friction_stress": ("friction stress |sigma_T|", "cividis")}
+# each stress shown (die.py: die_stresses), its colour bar's label in two lines (in one a short
+# row of panels let it run into the next row's label) and perceptually uniform colour map
+SHOWN = {"contact_pressure": ("contact pressure\n-sigma_N", "viridis"),
+         "friction_stress": ("friction stress\n|sigma_T|", "cividis")}
 
 
 def unrolled(points: np.ndarray) -> np.ndarray:
