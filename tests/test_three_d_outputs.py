@@ -225,6 +225,9 @@ def test_hardening_writes_the_strain_over_the_exit_section(shared_tmp, monkeypat
     mean = weights[0] @ grid @ weights[1] / (weights[0].sum() * weights[1].sum())
     assert mean == pytest.approx(summary["mean_exit_strain"], rel=0.02)
     assert strain.min() > summary["ideal_strain"]
+    # the workpiece's largest strain, at a point of the 3D bar, no lower than the exit section's
+    assert len(summary["max_strain_at"]) == 3
+    assert strain.max() <= summary["max_strain"] < 5 * summary["ideal_strain"]
     if RANK0:
         title = figures["exit_strain.png"].axes[0].get_title()
         assert f"max {strain.max():.4g}" in title and "exit section" in title
