@@ -1,8 +1,10 @@
 """The physical sanity checks (sanity.py) on summaries of a normal run with one number changed: each
 check is silent below its thresholds, warns between them and fails above, naming cause and fix."""
+import math
+
 import pytest
 
-from forming_fenicsx.post.sanity import check_run
+from forming_fenicsx.post.sanity import bite, check_run
 from forming_fenicsx.config.loader import scene_from_dict
 
 # measured on Example 2 (mu = 0.2, Q2 reduced, h = 0.05) with the default penalties
@@ -240,3 +242,24 @@ def test_a_hardening_strain_that_runs_away_is_named():
     assert not under.failure and "falls to -29.5" in under.message
     plastic = {f.check for f in check_run({**NORMAL, "max_strain": 99.0}, SCENE)}
     assert "strain_runaway" not in plastic  # no ideal strain: no hardening law
+
+
+def test_a_tension_no_friction_can_roll_against_is_named():
+    """A new user's annealed aluminium strip (demos/aluminium_strip_pass.toml) at front tensions
+    of 140 to 170 MPa was told that "the slab solution needs mu above inf" and to raise the
+    friction: the tension is above the strip's yield stress in plane-strain tension at the pass's
+    mean flow stress (2k = 132.8 MPa), which no friction rolls against. A tension below it keeps
+    the slab solution's least mu and the advice to raise the friction."""
+    def skidded(front: float) -> str:
+        scene = scene_from_dict({"process": {"kind": "rolling", "front_tension": front},
+                                 "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6,
+                                              "roll_radius": 20.0}, "friction": {"mu": 0.05}})
+        found = bite({**NORMAL, "entry_speed": 3.0, "neutral_x": math.nan}, scene)
+        assert found.failure and found.cause
+        return found.message
+
+    pulled = skidded(2.1)  # the law's k = 1: 2k = 2
+    assert "rolls it at no friction coefficient" in pulled and "1.05 and 0 of it" in pulled
+    assert "Lower the tensions" in pulled and "Raise the friction" not in pulled
+    mild = skidded(0.2)
+    assert "the slab solution needs mu above" in mild and "Raise the friction" in mild

@@ -460,17 +460,26 @@ def bite(summary: dict[str, Any], scene: Scene) -> Finding | None:
     g, process, law = scene.geometry, scene.process, scene.friction
     speed = summary.get("entry_speed", math.nan) / process.velocity
     limit = ""
+    fix = "Raise the friction, reduce the draft (a smaller bite angle) or lower the tensions"
     if law.law == "coulomb":
         k = scene.reference_flow_stress / math.sqrt(3.0)
         mu = bite_limit(g.roll_radius, g.entry_thickness, g.exit_thickness,
                         process.back_tension / k, process.front_tension / k)
         limit = (f"; friction.mu = {law.mu:.3g}, and the slab solution needs mu above {mu:.3g} "
-                 f"here (about tan(alpha/2) = {math.tan(g.bite_angle / 2):.3g} without tensions)")
+                 f"here (about tan(alpha/2) = {math.tan(g.bite_angle / 2):.3g} without tensions)"
+                 if math.isfinite(mu) else
+                 f"; the slab solution rolls it at no friction coefficient: its tensions (front "
+                 f"{process.front_tension:.4g}, back {process.back_tension:.4g}) against the "
+                 f"strip's yield stress in plane-strain tension, 2k = {2 * k:.4g} at the pass's "
+                 f"mean flow stress, are {process.front_tension / (2 * k):.3g} and "
+                 f"{process.back_tension / (2 * k):.3g} of it")
+        if not math.isfinite(mu):
+            fix = ("Lower the tensions: near the strip's yield stress no friction or draft rolls "
+                   "it")
     return Finding("bite", "the rolls do not draw the strip through the bite: its slip on the "
                    "rolls does not change sign along the arc (no neutral point; the strip enters "
                    f"at {speed:.3g} times the rolls' speed). The bite angle is "
-                   f"{g.die_angle:.3g} deg{limit}. Raise the friction, reduce the draft (a "
-                   "smaller bite angle) or lower the tensions", failure=True, cause=True)
+                   f"{g.die_angle:.3g} deg{limit}. {fix}", failure=True, cause=True)
 
 
 def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> list[Finding]:
