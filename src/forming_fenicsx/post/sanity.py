@@ -181,7 +181,7 @@ def strain_runaway(summary: dict[str, Any], scene: Scene) -> list[Finding]:
     rod at m = 0.8). Far above it, material that barely moves (a dead zone, a surface held by
     friction) keeps straining in the steady state, grows harder than the flow around it, and the
     flow turns away from it: annealed copper through a square die converged at 2061 MPa, where the
-    law without hardening at the pass's mean flow stress gives 581 (docs/hardening.md). A cause: a
+    law without hardening at the pass's mean flow stress gives 742 (docs/hardening.md). A cause: a
     run that stops is explained by it first. Below the entry strain: the transport's undershoot,
     where the law reads its strain floor's stress."""
     if "max_strain" not in summary or not summary.get("ideal_strain", 0.0) > 0:
@@ -465,15 +465,17 @@ def bite(summary: dict[str, Any], scene: Scene) -> Finding | None:
         k = scene.reference_flow_stress / math.sqrt(3.0)
         mu = bite_limit(g.roll_radius, g.entry_thickness, g.exit_thickness,
                         process.back_tension / k, process.front_tension / k)
-        limit = (f"; friction.mu = {law.mu:.3g}, and the slab solution needs mu above {mu:.3g} "
-                 f"here (about tan(alpha/2) = {math.tan(g.bite_angle / 2):.3g} without tensions)"
-                 if math.isfinite(mu) else
-                 f"; the slab solution rolls it at no friction coefficient: its tensions (front "
-                 f"{process.front_tension:.4g}, back {process.back_tension:.4g}) against the "
-                 f"strip's yield stress in plane-strain tension, 2k = {2 * k:.4g} at the pass's "
-                 f"mean flow stress, are {process.front_tension / (2 * k):.3g} and "
-                 f"{process.back_tension / (2 * k):.3g} of it")
-        if not math.isfinite(mu):
+        if math.isfinite(mu):
+            limit = (f"; friction.mu = {law.mu:.3g}, and the slab solution needs mu above "
+                     f"{mu:.3g} here (about tan(alpha/2) = {math.tan(g.bite_angle / 2):.3g} "
+                     "without tensions)")
+        else:
+            limit = (f"; the slab solution rolls it at no friction coefficient: its tensions "
+                     f"(front {process.front_tension:.4g}, back {process.back_tension:.4g}) "
+                     "against the strip's yield stress in plane-strain tension, 2k = "
+                     f"{2 * k:.4g} at the pass's mean flow stress, are "
+                     f"{process.front_tension / (2 * k):.3g} and "
+                     f"{process.back_tension / (2 * k):.3g} of it")
             fix = ("Lower the tensions: near the strip's yield stress no friction or draft rolls "
                    "it")
     return Finding("bite", "the rolls do not draw the strip through the bite: its slip on the "
