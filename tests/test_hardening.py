@@ -144,7 +144,7 @@ def test_copper_wire_schedule(shared_tmp):
     assert not (shared_tmp / "schedule" / "pass2" / "exit_strain.png").exists()
 
 
-def test_mean_flow_stress_over_a_pass(tmp_path):
+def test_mean_flow_stress_over_a_pass(tmp_path, monkeypatch):
     """The hardening laws' mean flow stress over a pass against its closed form (Hollomon with its
     strain floor, Voce), and the scene's stress scale (the penalties' sigma0): a rate law's flow
     stress at the process rate as before, a hardening law's mean from the inflow strain (a
@@ -185,6 +185,15 @@ def test_mean_flow_stress_over_a_pass(tmp_path):
         law.mean_flow_stress(rate, 0.2, 0.2 + ideal), rel=1e-14)
     power = scene({"law": "rate_power", "A": 200.0, "n": 0.1})
     assert power.reference_flow_stress == power.material.flow_stress([rate])[0]
+    # a stopped iterate's NaN entry strain: the stock's flow stress at the profile's mean strain
+    # (0.2, 132.1 MPa), not at initial_strain's default 0 (before this, 11.0 MPa at the floor)
+    from types import SimpleNamespace
+
+    from forming_fenicsx.post import product
+    stopped = SimpleNamespace(scene=profiled, strain=object())
+    monkeypatch.setattr(product, "mean_strain_through", lambda problem, leaving=True: math.nan)
+    assert product.product_flow_stress(stopped, leaving=False) == pytest.approx(
+        law.flow_stress([rate], 0.2)[0], rel=1e-14)
 
 
 def test_annealed_strip_answer_does_not_hang_on_the_strain_floor():

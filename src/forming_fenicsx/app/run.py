@@ -277,8 +277,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
         ideal = summary["mean_entry_strain"] + summary["ideal_strain"]
         across = (exit_section_values(problem, problem.strain) if three_d
                   else exit_strain_profile(problem))
-        note = strain_undershoot(across, getattr(scene.material, "initial_strain", 0.0),
-                                 comm) if three_d else ""
+        note = strain_undershoot(across, scene.inflow_strain, comm) if three_d else ""
         if note:
             summary["warnings"].append(note)
             if comm.rank == 0:

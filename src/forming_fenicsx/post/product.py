@@ -91,7 +91,7 @@ def product_flow_stress(problem: FlowProblem, leaving: bool = True) -> float:
         return scene.reference_flow_stress
     strain = mean_strain_through(problem, leaving)
     if not leaving and not math.isfinite(strain):  # an iterate that stopped with a NaN strain: the
-        strain = getattr(scene.material, "initial_strain", 0.0)  # stock's prescribed one
+        strain = scene.inflow_strain  # the stock's prescribed one (a profile's section mean)
     return float(scene.material.flow_stress([scene.reference_strain_rate], strain)[0])
 
 
