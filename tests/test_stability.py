@@ -155,7 +155,9 @@ def test_drawing_beyond_drawability_fails():
     """At 50 % reduction with mu = 0.2 the drawing stress exceeds 2k = 201: no steady
     drawing exists, the run is not converged and says why. On h = 0.2 (measured on 1 and 2 ranks:
     201.86, 1.003 times the product's yield stress, the iteration converged in 495 solves, 3.3 s; on
-    h = 0.1: 201.29, 1.000 times, 500 solves without converging, 10.6 s)."""
-    result = drawing(geometry={"exit_thickness": 0.8125}, discretisation={"mesh_size": 0.2})
+    h = 0.1: 201.29, 1.000 times, 500 solves without converging, 10.6 s). Stopped after 150
+    iterates (201.53, 1.1 s) it says the same."""
+    result = drawing(geometry={"exit_thickness": 0.8125}, discretisation={"mesh_size": 0.2},
+                     solver={"max_iterations": 150})
     assert result["drawing_stress"] > 201 and not result["converged"]
     assert any("not drawable" in f for f in result["failed_checks"])
