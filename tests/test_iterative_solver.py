@@ -172,10 +172,9 @@ def test_p_multigrid_velocity_iterations_per_newton_step():
     gamg = {"fieldsplit_u_pc_type": "gamg"}
     for size in (1.2, 1.0):
         rows = {}
-        for name, options in (("mg", {}), ("gamg", gamg)):
+        for name, options in (("mg", {}), ("gamg", {"petsc_options": gamg})):
             discretisation = {**BAR["discretisation"], "mesh_size": size}
-            solver = {**BAR["solver"], "linear": "iterative", **({"petsc_options": options}
-                                                                 if options else {})}
+            solver = {**BAR["solver"], "linear": "iterative", **options}
             result, summary = _run({**BAR, "discretisation": discretisation, "solver": solver})
             steps = [record.velocity_iterations for record in result.history
                      if not math.isnan(record.residual)]
