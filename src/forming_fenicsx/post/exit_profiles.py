@@ -25,10 +25,10 @@ LAYER_POINTS = 8
 
 
 def exit_section(problem: FlowProblem, points: int) -> tuple[float, np.ndarray]:
-    """The product's section half an exit thickness before the workpiece's end, x, and ``points``
-    heights on it from the axis to the surface (the workpiece's top there, product.product_top;
-    the last a hair inside, more so under a free surface, which the isoparametric cells, their
-    nodes on it, follow to about 1e-7 of the size)."""
+    """The product's section half its half-thickness (radius) before the workpiece's end, x, and
+    ``points`` heights on it from the axis to the surface (the workpiece's top there,
+    product.product_top; the last a hair inside, more so under a free surface, which the
+    isoparametric cells, their nodes on it, follow to about 1e-7 of the size)."""
     g = problem.scene.geometry
     x = g.length - 0.5 * g.thinnest
     inside = 1e-6 if problem.scene.free_surface.update else 1e-9
