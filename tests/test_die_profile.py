@@ -122,6 +122,9 @@ def test_csv_straight_cone_reproduces_the_parametric_die(tmp_path):
     ("x,y\n0,1\n1,1.2\n", "row 3: y = 1.2 rises"),
     ("x,y\n0,1\n1,-0.5\n", "row 3: y = -0.5 must be > 0"),
     ("x,y\n0,1\n1,inf\n", "row 3: need two finite numbers"),
+    # a new user's bell die in inches, its polyline from x = 0: the die would start at the entry
+    # face (before, geometry.die_entry, a key not in the scene, was named)
+    ("x,y\n0,0.125\n0.1,0.125\n0.27,0.11\n0.31,0.11\n", "starts at x = 0, where the die"),
 ])
 def test_csv_profile_refusals_name_the_key_and_row(tmp_path, rows, message):
     path = tmp_path / "die.csv"

@@ -286,6 +286,11 @@ def test_die_parts_by_slope():
     assert square == ["container wall", "container wall", "die face", "die face"]
     cone = die_parts(np.array([0.0, 1.0, 2.0, 3.0]), np.array([5.0, 5.0, 4.0, 4.0]))
     assert cone == ["container wall", "cone", "land"]
+    # a curved die's tail within 1 deg of the axis before its land (a new user's bell die: the
+    # land's band started two elements early)
+    tail = (np.array([0.0, 1.0, 2.0, 3.0, 4.0]), np.array([5.0, 4.0, 3.99, 3.99, 3.99]))
+    assert die_parts(*tail) == ["cone", "land", "land", "land"]
+    assert die_parts(*tail, land_start=2.0) == ["cone", "cone", "land", "land"]
 
 
 def test_die_body_closes_the_wall_above():

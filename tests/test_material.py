@@ -115,14 +115,17 @@ def test_potential_derivative_is_the_flow_stress(index):
 
 
 def test_named_material_cited_and_overridden():
-    """material.name = "copper_annealed" is Hollomon K = 315 MPa, n = 0.54 (Kalpakjian & Schmid);
-    a key given beside it overrides the table's."""
+    """material.name = "copper_annealed" is Hollomon K = 315 MPa, n = 0.54 (Kalpakjian & Schmid),
+    in the scene's stress unit; a key given beside it overrides the table's."""
     from forming_fenicsx.config.loader import scene_from_dict
 
     data = {"process": {"kind": "drawing"}, "units": {"stress": "MPa", "length": "mm"},
             "material": {"name": "copper_annealed"}, "discretisation": {"averaging": "quadrature"}}
     law = scene_from_dict(data).material
     assert (law.law, law.K, law.n) == ("hollomon", 315.0, 0.54)
+    # in psi (a new user's wire in inches: before, refused): K converted, n as it is
+    psi = scene_from_dict({**data, "units": {"stress": "psi", "length": "in"}}).material
+    assert psi.K == pytest.approx(315e6 / 6894.757293168361, rel=1e-14) and psi.n == 0.54
     data["material"]["K"] = 400.0
     assert scene_from_dict(data).material.K == 400.0
     with pytest.raises(SceneError, match="quadrature"):
@@ -172,11 +175,20 @@ def test_sellars_tegart_law():
         with pytest.raises(SceneError) as error:
             scene(material)
         assert error.value.key == key
-    with pytest.raises(SceneError) as error:
+    # in ksi and 1/min (before, refused): the same law, its values converted
+    imperial = scene_from_dict({"process": {"kind": "extrusion"},
+                                "units": {"length": "in", "stress": "ksi", "time": "min"},
+                                "discretisation": {"averaging": "quadrature"},
+                                "material": {"name": "AA6063", "temperature": 723.15}}).material
+    ksi = 6.894757293168361  # MPa
+    for rate in (0.01, 1.0, 100.0):  # 1/s
+        assert imperial.flow_stress([60.0 * rate])[0] * ksi == pytest.approx(
+            law.flow_stress([rate])[0], rel=1e-12)
+    with pytest.raises(SceneError) as error:  # a unit given as a label only cannot be converted
         scene_from_dict({"process": {"kind": "extrusion"},
-                         "units": {"stress": "MPa", "time": "min"},
+                         "units": {"stress": "MPa", "time": "fortnight"},
                          "material": {"name": "AA6063", "temperature": 700.0}})
-    assert error.value.key == "material.name"
+    assert error.value.key == "material.name" and "units.time = 'fortnight'" in str(error.value)
     with pytest.raises(SceneError) as error:
         scene({"name": "AA6063", "temperature": 700.0}, thermal={
             "heat_capacity": 2.98, "conductivity": 201.0, "inflow_temperature": 723.15})

@@ -331,6 +331,12 @@ class _ProfiledDie(_Strip):
                                  "geometry.die_profile_file (the die is the file's polyline); "
                                  "leave it out")
         points = read_profile_csv(self.die_profile_file, "geometry.die_profile_file")
+        if not points[0, 0] > 0:  # the die starts at its first x: the stock is modelled ahead
+            raise SceneError("geometry.die_profile_file",
+                             f"starts at x = {points[0, 0]:.9g}, where the die meets the "
+                             "workpiece: the stock is modelled from x = 0 to there, so the "
+                             "polyline's first x must be > 0 (shift its x by the stock's length "
+                             "to model ahead of the die)")
         for end, y in (("entry", points[0, 1]), ("exit", points[-1, 1])):
             key = f"{end}_thickness"
             given = getattr(self, key)

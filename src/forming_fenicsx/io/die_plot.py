@@ -14,18 +14,22 @@ DIE_PARTS = {"container wall": "tab:green", "die face": "tab:red", "cone": "tab:
              "land": "tab:brown"}
 
 
-def die_parts(x: np.ndarray, y: np.ndarray) -> list[str]:
+def die_parts(x: np.ndarray, y: np.ndarray, land_start: float | None = None) -> list[str]:
     """The part of the die each segment between consecutive nodes of Gamma3 lies on, by its slope:
     "die face" (within 10 deg of the normal to the axis, a square die's face), level (within 1 deg
-    of the axis: the "container wall" before the first inclined segment, the "land" after it),
-    else "cone"."""
+    of the axis: the "container wall" before the first inclined segment, the "land" after it, but
+    with the die's ``land_start`` given not before that x: a curved die's tail that meets the land
+    tangentially is "cone"), else "cone"."""
     slope = np.degrees(np.arctan2(np.abs(np.diff(y)), np.abs(np.diff(x))))
+    middle = 0.5 * (x[1:] + x[:-1])
     parts, reached = [], False
-    for angle in slope:
+    for angle, at in zip(slope, middle):
         if angle > 80.0:
             parts.append("die face")
-        elif angle < 1.0:
-            parts.append("land" if reached else "container wall")
+        elif angle < 1.0 and not reached:
+            parts.append("container wall")
+        elif angle < 1.0 and (land_start is None or at > land_start):
+            parts.append("land")
         else:
             parts.append("cone")
         reached |= angle >= 1.0
@@ -44,7 +48,10 @@ def write_die_plot(profile: dict, path: Path, heading: Heading, scene: Scene) ->
     names = {"contact_pressure": ("contact pressure", " -sigma_N"), "averaged_normal_stress":
              ("averaged normal stress", ""), "friction_stress": ("friction stress", " |sigma_T|")}
     shown = [key for key in names if key in profile]
-    parts = die_parts(profile["x"], profile["y"])
+    geometry = scene.geometry
+    land_start = (geometry.profile().land_start if hasattr(geometry, "profile")
+                  and geometry.mesh_file is None else None)
+    parts = die_parts(profile["x"], profile["y"], land_start)
     for index, part in enumerate(parts):
         first = index == parts.index(part)
         label = part if first else None
