@@ -109,14 +109,15 @@ def test_an_overdrawn_wire_is_not_drawable_and_called_a_wire():
 
 HOT = {"max_temperature": 760.0, "min_temperature": 690.0,
        "energy_balance": {"residual": 2e-4, "global_residual": 6e-4}}
-HOT_SCENE = scene_from_dict({
+HOT_DICT = {
     "process": {"kind": "extrusion", "velocity": 5.0},
     "geometry": {"die": "conical", "symmetry": "axisymmetric", "entry_diameter": 50.0,
                  "exit_diameter": 20.0},
     "material": {"name": "AA6063"}, "discretisation": {"averaging": "quadrature"},
     "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
     "thermal": {"heat_capacity": 2.98, "conductivity": 201.0, "inflow_temperature": 723.15,
-                "container_h": 5.0, "container_temperature": 693.15, "air_h": 0.01}})
+                "container_h": 5.0, "container_temperature": 693.15, "air_h": 0.01}}
+HOT_SCENE = scene_from_dict(HOT_DICT)
 
 
 @pytest.mark.parametrize("changed, check, failure", [
@@ -136,6 +137,25 @@ def test_heat_checks(changed, check, failure):
         assert found == {}
     else:
         assert list(found) == [check] and found[check].failure == failure
+
+
+def test_a_temperature_meant_in_celsius_is_named():
+    """A new user's hot strip with units.temperature = "C" and its [thermal] temperatures written
+    in Celsius (480, 450 and 20: the run went on at 207 C with the air at -253 C, 364 MPa against
+    107 unflagged): the air's 20 K is named, with the 273.15 to add; the hot rod's kelvin are
+    not, nor an air temperature the workpiece exchanges no heat with."""
+    def celsius_slips(thermal: dict) -> list[str]:
+        scene = scene_from_dict({**HOT_DICT, "thermal": {**HOT_DICT["thermal"], **thermal}})
+        return [f.message for f in check_run({**NORMAL, **HOT}, scene)
+                if f.check == "kelvin_temperature"]
+
+    assert celsius_slips({}) == []
+    slips = celsius_slips({"inflow_temperature": 480.0, "container_temperature": 450.0,
+                           "air_temperature": 20.0})
+    assert len(slips) == 1 and slips[0].startswith("thermal.air_temperature = 20 K is -253.15 C")
+    assert "+ 273.15" in slips[0]
+    assert celsius_slips({"air_temperature": 20.0, "air_h": 0.0}) == []
+    assert len(celsius_slips({"die_temperature": 77.0, "die_h": 10.0})) == 1
 
 
 def test_a_molten_workpiece_is_refused_before_any_work():

@@ -374,14 +374,22 @@ class Thermal:
             raise SceneError("thermal.inflow_temperature", f"{self.inflow_temperature:g} K is not "
                              f"below the solidus {self.solidus:g} K: the workpiece enters molten")
 
+    def surroundings(self) -> dict[str, float]:
+        """The temperatures that enter or surround the workpiece, by key: the inflow's, the die's,
+        and the container's and the air's where they exchange heat."""
+        around = {"inflow_temperature": self.inflow_temperature,
+                  "die_temperature": self.die_temperature}
+        if self.container_h:
+            around["container_temperature"] = self.container_temperature
+        if self.air_h:
+            around["air_temperature"] = self.air_temperature
+        return around
+
     @property
     def coldest(self) -> float:
         """The lowest temperature that enters or surrounds the workpiece: with no heat sink in it,
         no point of a steady workpiece can be colder (the maximum principle)."""
-        around = [self.inflow_temperature, self.die_temperature]
-        around += [self.container_temperature] if self.container_h else []
-        around += [self.air_temperature] if self.air_h else []
-        return min(around)
+        return min(self.surroundings().values())
 
 
 # The summary numbers accuracy on demand can drive, by process; the first is the default

@@ -56,6 +56,9 @@ SOLIDUS = (0.95, 1.0)        # highest temperature over the solidus, both in kel
 UNDERCOOLED = (1.0, 10.0)    # K below the coldest temperature entering or around the workpiece
 ENERGY_BALANCE = (0.01, 0.05)
 KELVIN = 273.15
+# a [thermal] temperature below this (kelvin) is most likely one meant in Celsius: only cryogenic
+# forming (liquid nitrogen, 77 K) works so cold
+CELSIUS_SLIP = 150.0
 
 
 @dataclass(frozen=True)
@@ -410,12 +413,18 @@ def _temperature(kelvin: float) -> str:
 
 
 def heat(summary: dict[str, Any], scene: Scene) -> list[Finding]:
-    """[thermal]: a solid workpiece stays below its solidus, no colder than what enters or surrounds
-    it (no heat sink inside), and its energy balances close."""
+    """[thermal]: its temperatures are kelvin (one below CELSIUS_SLIP was likely meant in Celsius),
+    a solid workpiece stays below its solidus, no colder than what enters or surrounds it (no heat
+    sink inside), and its energy balances close."""
     thermal = scene.thermal
     if thermal is None or "max_temperature" not in summary:
         return []
-    found = []
+    found = [Finding("kelvin_temperature",
+                     f"thermal.{key} = {value:g} K is {value - KELVIN:.2f} C: [thermal] "
+                     "temperatures are in kelvin whatever units.temperature shows (a temperature "
+                     f"meant in Celsius needs + {KELVIN}); colder than {CELSIUS_SLIP:g} K only "
+                     "cryogenic forming runs")
+             for key, value in thermal.surroundings().items() if value < CELSIUS_SLIP]
     hottest, coldest = summary["max_temperature"], summary["min_temperature"]
     if thermal.solidus is not None:
         finding = _graded("melting", hottest / thermal.solidus, SOLIDUS,
