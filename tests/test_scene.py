@@ -123,6 +123,12 @@ BAD = [
      "geometry.die_angle", "(0, 90)"),
     ({"process": {"kind": "drawing"}, "geometry": {"die_angle": 90.0}},
      "geometry.die_angle", "(0, 90)"),
+    # a new user's flat extrusion die given as a 90 degree cone: the square die named
+    ({"process": {"kind": "extrusion"}, "geometry": {"die": "conical", "die_angle": 90.0}},
+     "geometry.die_angle", 'a flat die face is geometry.die = "square"'),
+    # a new user's wire without its symmetry: the one a diameter belongs to named
+    ({"process": {"kind": "drawing"}, "geometry": {"entry_diameter": 3.0, "exit_diameter": 2.6}},
+     "geometry.entry_diameter", 'a diameter is given with geometry.symmetry = "axisymmetric"'),
     ({"process": {"kind": "drawing"}, "geometry": {"land_length": -0.1}},
      "geometry.land_length", ">= 0"),
     ({"process": {"kind": "drawing"}, "geometry": {"land_length": 9.0, "length": 7.8}},

@@ -83,10 +83,15 @@ class _Strip:
                 if size == given or (size == "width" and self.shape == "rectangle"):
                     continue
                 if getattr(self, f"{end}_{size}") is not None:
+                    # the symmetry a size of this name describes (a round bar's diameter)
+                    meant = {"diameter": 'symmetry = "axisymmetric"',
+                             "height": 'symmetry = "3d" with section = "rectangle"'}.get(size)
                     raise SceneError(f"geometry.{end}_{size}", f"does not describe a {self.shape} "
                                      f"(symmetry = {self.symmetry!r}); it has geometry.{end}_"
                                      f"{given}" + (" and _width" if self.shape == "rectangle"
-                                                   else ""))
+                                                   else "")
+                                     + (f" (a {size} is given with geometry.{meant})"
+                                        if meant and self.shape == "strip" else ""))
             if given != "thickness":
                 setattr(self, f"{end}_thickness", getattr(self, f"{end}_{given}"))
 
@@ -363,7 +368,10 @@ class _ProfiledDie(_Strip):
             value = getattr(self, key)
             if value is not None and not 0 < value < 90:
                 raise SceneError(f"geometry.{key}",
-                                 f"must lie in (0, 90) degrees (a semi-angle); got {value}")
+                                 f"must lie in (0, 90) degrees (a semi-angle); got {value}"
+                                 + (' (a flat die face is geometry.die = "square")'
+                                    if value == 90 and key == "die_angle"
+                                    and isinstance(self, ConicalExtrusionGeometry) else ""))
         for key in ("land_length", "entry_radius"):
             if not getattr(self, key) >= 0:
                 raise SceneError(f"geometry.{key}",
