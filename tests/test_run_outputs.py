@@ -195,6 +195,25 @@ def test_quiet_run_with_a_cold_form_cache_prints_nothing_and_the_folder_has_user
     assert json.loads((out / "summary.json").read_text())["warnings"] == []
 
 
+def test_the_command_drops_ffcx_advice_on_integration_points():
+    """A new user's square bar in inches on 2 ranks, --quiet, printed FFCx's UserWarning on a 3D
+    form's 121 integration points (through py.warnings and the root logger's handler) on its first
+    compile: the command's filter drops it, as it drops the compiler's build lines, and lets any
+    other warning through."""
+    from forming_fenicsx.app.cli import _not_a_compiler_line
+
+    def record(name: str, message: str) -> logging.LogRecord:
+        return logging.LogRecord(name, logging.WARNING, "/usr/lib/python3/warnings.py", 1, message,
+                                 None, None)
+
+    advice = ("/usr/lib/python3/dist-packages/ffcx/element_interface.py:81: UserWarning: Number "
+              "of integration points per cell is: 121. Consider using 'quadrature_degree' to "
+              "reduce number.")
+    assert not _not_a_compiler_line(record("py.warnings", advice))
+    assert _not_a_compiler_line(record("py.warnings", "UserWarning: something else"))
+    assert _not_a_compiler_line(record("forming_fenicsx", "Number of integration points"))
+
+
 def test_a_run_leaves_no_petsc_options_behind():
     """PETSc's options database holds 512 entries: each run's prefixed solver options are removed
     when its solvers are destroyed (the whole suite in one process once filled it)."""

@@ -99,7 +99,11 @@ def _parser() -> argparse.ArgumentParser:
 def _not_a_compiler_line(record: logging.LogRecord) -> bool:
     """False for the C compiler's build lines: when FFCx compiles a form, setuptools logs every
     compile and link command through the root logger, whose handler FFCx installed (about 30 lines
-    a run)."""
+    a run); and for FFCx's advice on a form's many integration points (its UserWarning, logged
+    through py.warnings when a 3D form of the forms' own degree compiles: "Number of integration
+    points per cell is: 121. Consider using 'quadrature_degree'")."""
+    if record.name == "py.warnings" and "Number of integration points" in record.getMessage():
+        return False
     return not ("distutils" in record.pathname or "setuptools" in record.pathname)
 
 
