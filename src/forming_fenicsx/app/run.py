@@ -74,8 +74,7 @@ def solve_scene(scene: Scene, petsc_options: dict[str, Any] | None = None,
         load_velocity(Path(restart) / "velocity.npz", initial)
     elif isinstance(previous, FlowProblem):
         initial = problem.u.copy()
-        transfer(previous.u, initial)
-        problem.carry_from(previous)
+        problem.carry_from(previous, initial)
     elif previous is not None:
         initial = problem.u.copy()
         transfer(previous, initial)

@@ -48,11 +48,11 @@ class ContactMultiplier:
             self.updates += 1
         return change
 
-    def start_from(self, source: dolfinx.fem.Function) -> None:
+    def start_from(self, source: dolfinx.fem.Function, nodal: bool = False) -> None:
         """lambda of a solved problem on another mesh of the workpiece (a warm start): the
-        source multiplier at this one's nodes of Gamma3 (transfer.py), zero elsewhere as after an
-        update."""
-        transfer(source, self.value)
+        source multiplier at this one's nodes of Gamma3 (transfer.py; node for node on a mesh of
+        the source's layout, ``nodal``), zero elsewhere as after an update."""
+        transfer(source, self.value, nodal)
         owned = self.value.function_space.dofmap.index_map.size_local
         self.value.x.array[:owned] *= self._projector.weights_mask()
         self.value.x.array[:owned] = np.maximum(self.value.x.array[:owned], 0.0)

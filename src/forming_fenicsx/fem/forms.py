@@ -23,6 +23,7 @@ from forming_fenicsx.fem.entry_speed import EntrySpeed
 from forming_fenicsx.fem.fields import FlowFields
 from forming_fenicsx.fem.frozen import FrozenCoefficient, FrozenVelocity
 from forming_fenicsx.mesh.geometry import FormingMesh
+from forming_fenicsx.mesh.transfer import same_layout, transfer
 from forming_fenicsx.fem.measures import Measures
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.config.scene import Scene
@@ -372,12 +373,16 @@ class FlowProblem:
         for coefficient in self.frozen:
             coefficient.freeze(u)
 
-    def carry_from(self, previous: FlowProblem) -> None:
-        """The augmented contact's multiplier of a solved problem on another mesh of the workpiece
-        (ContactMultiplier.start_from): without it a warm start's first iterate has the penalty's
-        contact pressure alone, and no friction bound (Coulomb's reads lambda)."""
+    def carry_from(self, previous: FlowProblem, initial: dolfinx.fem.Function) -> None:
+        """A solved problem on another mesh of the workpiece carried over (mesh/transfer.py; node
+        for node where the mesh is the previous one's with its nodes moved, same_layout): its
+        velocity into ``initial``, and the augmented contact's multiplier
+        (ContactMultiplier.start_from), without which a warm start's first iterate has the
+        penalty's contact pressure alone, and no friction bound (Coulomb's reads lambda)."""
+        nodal = same_layout(previous.u, self.u, (previous.facet_tags, self.facet_tags))
+        transfer(previous.u, initial, nodal)
         if self.multiplier is not None and previous.multiplier is not None:
-            self.multiplier.start_from(previous.multiplier.value)
+            self.multiplier.start_from(previous.multiplier.value, nodal)
 
     def start_at(self, u: dolfinx.fem.Function) -> None:
         """Every frozen coefficient for an iteration started from u, near the answer

@@ -150,9 +150,8 @@ class ColumnValues:
                                 index)
         hit = np.flatnonzero(held)
         pair = candidate[hit]
-        t = _newton(lambda value: _interpolate(column[pair], value, self._levels),
-                    (points[hit, 1] - bottom[pair]) / (top[pair] - bottom[pair]), points[hit, 1],
-                    self._levels)
+        t = _newton(column[pair], (points[hit, 1] - bottom[pair]) / (top[pair] - bottom[pair]),
+                    points[hit, 1], self._levels)
         along = self._along[pair_cell[pair]]
         reference = np.where(along[:, None] == 0, np.column_stack([s[pair], t]),
                              np.column_stack([t, s[pair]]))
@@ -187,8 +186,7 @@ class ColumnValues:
         low, high = self._low[pair_cell], self._high[pair_cell]
         s = (x - low) / (high - low)
         s = np.where(nodes[:, 0] <= nodes[:, -1], s, 1.0 - s)  # x may fall along s
-        return _newton(lambda value: _interpolate(nodes, value, self._levels), s, x,
-                       self._levels)
+        return _newton(nodes, s, x, self._levels)
 
 
 def _basis(s: np.ndarray, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -213,17 +211,21 @@ def _interpolate(nodes: np.ndarray, s: np.ndarray, levels: np.ndarray
     return np.einsum("pa,pa->p", values, nodes), np.einsum("pa,pa->p", slopes, nodes)
 
 
-def _newton(function, guess: np.ndarray, target: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """Newton's method for function(v)[0] = target, function(v)[1] its derivative; the guess
-    itself on two ``levels`` (a linear map: the straight cell's guess is the root)."""
+def _newton(nodes: np.ndarray, guess: np.ndarray, target: np.ndarray, levels: np.ndarray
+            ) -> np.ndarray:
+    """Newton's method for sum_a l_a(v) nodes[:, a] = target, each point on its own until its step
+    is below 1e-14 (a straight cell's guess is its root: most points stop at once); the guess
+    itself on two ``levels`` (a linear map)."""
     if len(levels) == 2:
         return guess
-    value = guess
+    value = np.array(guess, dtype=float)
+    going = np.arange(len(value))
     for _ in range(NEWTON_STEPS):
-        result, slope = function(value)
-        step = (target - result) / slope
-        value = value + step
-        if not len(step) or np.max(np.abs(step)) < 1e-14:
+        result, slope = _interpolate(nodes[going], value[going], levels)
+        step = (target[going] - result) / slope
+        value[going] += step
+        going = going[np.abs(step) >= 1e-14]
+        if not len(going):
             break
     return value
 
