@@ -136,9 +136,26 @@ def test_a_warm_start_carries_the_contact_multiplier():
     before, after = problem.multiplier.value.x.array, again.multiplier.value.x.array
     assert np.max(np.abs(after - before)) < 1e-10 * np.max(np.abs(before))
     assert result.linear_solves <= 3 and result.history[0].increment < 1e-3
+    # the same mesh: carried node for node, and not ended on its first iterate
+    assert again.first_iterates == 2 and result.linear_solves >= 2
     velocity_only = solve_scene(scene, previous=problem.u, quiet=True)[1]
     assert velocity_only.history[0].increment > 100 * result.history[0].increment
     assert velocity_only.linear_solves > 3 * result.linear_solves
+
+
+def test_a_flow_carried_node_for_node_is_not_ended_on_its_first_iterate():
+    """Example 2 (the paper's modified secant method, 0.1 mesh) solved again from its own answer
+    on the same mesh: the first iterate moves u by 8.1e-5, below delta = 1e-4, and the second by
+    6.8e-5 (measured): the method's contraction there is 0.83, and an iteration ended on its first
+    iterate would report a flow whose distance to the answer is about five times that. It ends
+    from the second iterate on (FlowProblem.carry_from)."""
+    scene = load_scene(EXAMPLE2, ["discretisation.mesh_size=0.1", "output.fields=false",
+                                  "output.figures=false"])
+    problem = solve_scene(scene, quiet=True)[0]
+    again, result, _ = solve_scene(scene, previous=problem, quiet=True)
+    assert again.first_iterates == 2 and problem.first_iterates == 1
+    assert result.history[0].increment < scene.solver.tolerance
+    assert result.linear_solves >= 2 and result.converged
 
 
 def test_a_newtonian_jet_swells_as_published():
@@ -470,10 +487,9 @@ def test_stations_graded_toward_the_end_mirror_those_toward_the_start():
 def test_a_15_degree_wire_settled_to_1e_4_crosses_below_a_thousandth():
     """The round copper wire, 2 -> 1.789 mm through a 15 degree frictionless die with a 0.5 mm
     land, on the default graded mesh at free_surface.tolerance = 1e-4 (docs/free_surface.md):
-    crossing 0.60 + 0.014 % on the scene's domain, 0.032 + 0.060 % after 3 updates (measured;
+    crossing 0.60 + 0.014 % on the scene's domain, 0.031 + 0.060 % after 3 updates (measured;
     0.21 % at the default tolerance 1e-3, where the stock's streamline still passes 0.0008 mm
-    under the wall at the contact start), in 9 + 6 + 2 + 3 linear solves, the last shape's flow
-    solved to a tenth of the move that made it (1.66e-4 of the exit radius)."""
+    under the wall at the contact start), in 9 + 6 + 2 + 2 linear solves."""
     scene = load_scene(DEMOS / "copper_wire.toml", [
         "geometry.exit_diameter=1.789", "geometry.die_angle=15", "friction.mu=0",
         "discretisation.corner_grading=64", "discretisation.wall_grading=16",
@@ -482,13 +498,10 @@ def test_a_15_degree_wire_settled_to_1e_4_crosses_below_a_thousandth():
     table = summary["free_surface"]
     assert table["converged"] and table["history"][0]["free_surface_crossing"] > 0.005
     # the updates after the first are meshed by the same blocks and start from the last flow
-    # node for node: 2 and 3 solves (measured; 5 and 3 by point values, 23 solves in all)
+    # node for node: 2 solves each, the least its flow may end after (FlowProblem.carry_from;
+    # measured; 5 and 3 by point values, 23 solves in all)
     solves = [row["linear_solves"] for row in table["history"]]
-    assert max(solves[2:]) <= 3 and table["linear_solves"] <= 21
-    moves = [row["surface_move"] for row in table["history"]]
-    tolerances = [row["solver_tolerance"] for row in table["history"]]
-    assert tolerances[:3] == [scene.solver.tolerance] * 3
-    assert tolerances[3] == pytest.approx(0.1 * moves[2], rel=1e-12) and tolerances[3] < 2e-5
+    assert solves[2:] == [2, 2] and table["linear_solves"] <= 20
     assert summary["free_surface_crossing"] < 0.001
     assert summary["free_surface_crossing_stock"] < 0.0005
     assert table["history"][-1]["stock_miss"] < 1e-4

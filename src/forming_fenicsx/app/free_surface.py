@@ -5,13 +5,6 @@ interpolated onto the new mesh (mesh/transfer.py), until the surfaces move by le
 free_surface.tolerance times the exit half-size and the stock's streamline meets the die wall
 within that (docs/free_surface.md).
 
-A shape whose next move is near the tolerance is judged on a flow solved to a tenth of that move
-(_judged: solver.tolerance at most FLOW_SHARE times the move, and never below FLOW_SHARE times
-free_surface.tolerance): a flow solved only to delta moves the surface by as much as the
-tolerance where the contact start is sensitive to it (the stainless strip demo: its stock's miss
-went 7e-5, 1.8e-4, 4.2e-4 of the exit half-size with flows solved to delta = 1e-4 from the last
-flow node for node, one Newton step the one of them, and did not settle in 8 updates).
-
 A shape that still moves needs its flow's velocity, not its forces: those flows are drafts, solved
 without the force-balance criterion (solver.force_tolerance), and Newton's started from the last
 flow without its secant start. The last shape's draft is solved on to the scene's own rules on the
@@ -37,8 +30,6 @@ from forming_fenicsx.post.free_surface import SurfaceNotFound, shape_change, upd
 from forming_fenicsx.solvers.records import SolveResult
 
 log = logging.getLogger(__name__)
-# a shape's flow is solved to at most this share of the move that made it (module docstring)
-FLOW_SHARE = 0.1
 
 Solve = Callable[[Scene, "FlowProblem | None", "Callable[[], None] | None"],
                  tuple[FlowProblem, SolveResult, dict[str, Any]]]
@@ -98,7 +89,6 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             break
         move = max(shape_change(shape, new, scene.geometry.length), new.stock_miss) / h1
         updates.append({"linear_solves": summary["linear_solves"],
-                        "solver_tolerance": summary["scene"]["solver"]["tolerance"],
                         "wall_time_s": summary["wall_time_s"],
                         "free_surface_crossing": summary["free_surface_crossing"],
                         **shape_scalars(scene, shape), "surface_move": move,
@@ -116,8 +106,7 @@ def solve_free_surface(scene: Scene, solve: Solve, comm: MPI.Comm = MPI.COMM_WOR
             break
         last = problem, result, summary, shape
         shape, moved = new, moved + 1
-        problem, result, summary = solved(_warm(_judged(draft, move, settings.tolerance)),
-                                          problem, _mesher(scene, shape, comm))
+        problem, result, summary = solved(_warm(draft), problem, _mesher(scene, shape, comm))
         folded = folded_cells(problem.mesh)
         failed = "" if summary["iteration_converged"] else summary["reason"]
         if folded or failed:  # the last shape's solve stands: this mesh's cannot be trusted
@@ -180,16 +169,6 @@ def _draft(scene: Scene) -> Scene:
         return scene
     return dataclasses.replace(scene, solver=dataclasses.replace(scene.solver,
                                                                  force_tolerance=0.0))
-
-
-def _judged(scene: Scene, move: float, tolerance: float) -> Scene:
-    """The scene for the flow of a shape made by a move of ``move`` (over the exit half-size):
-    solver.tolerance at most FLOW_SHARE times the move, not below FLOW_SHARE times the free
-    surface's ``tolerance`` (module docstring)."""
-    delta = min(scene.solver.tolerance, FLOW_SHARE * max(move, tolerance))
-    if delta == scene.solver.tolerance:
-        return scene
-    return dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, tolerance=delta))
 
 
 def _warm(scene: Scene) -> Scene:

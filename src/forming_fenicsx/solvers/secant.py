@@ -282,7 +282,9 @@ class SecantSolver:
                 if outer_limit == 1:  # the direct method: the coupled fields froze every iterate
                     settled = settled and problem.coupled_settled(problem.u,
                                                                   settings.coupling_tolerance)
-                if increment < delta and settled and (outer_limit > 1 or self._balanced(result)):
+                early = outer == 0 and inner < problem.first_iterates  # FlowProblem.carry_from
+                if increment < delta and settled and not early and (
+                        outer_limit > 1 or self._balanced(result)):
                     break
             else:
                 result.reason = messages.no_convergence(settings.max_iterations, increment, delta,
