@@ -210,8 +210,9 @@ class SecantSolver:
         problem = self.problem
         if initial is not None:
             petsc_vec(initial).copy(petsc_vec(problem.u))
-            dolfinx.fem.petsc.set_bc(petsc_vec(problem.u), problem.bcs)
-            problem.u.x.scatter_forward()
+            problem.fields.start_from_velocity()  # the mixed formulation's solution from u
+            dolfinx.fem.petsc.set_bc(petsc_vec(problem.solution), problem.bcs)
+            problem.fields.after_solve()  # u (and the pressure) from the solution
             if near_answer:
                 problem.start_at(problem.u)
             return True
