@@ -81,7 +81,8 @@ def test_compare_axisymmetric_against_plane_strain():
 
 def test_free_surface_bench_pairs_each_scene_fixed_and_free():
     """`forming bench --free-surface` on Example 2 (mu = 0), launched in this process: the fixed
-    run's 14 solves, the free run's three updates and 29 solves, the strip 1.5 % under the land;
+    run's 14 solves, the free run's three updates and 30 solves (29 while a warm start could end on
+    its first iterate: FlowProblem.carry_from), the strip 1.5 % under the land;
     the table holds both rows with their ratios (the whole bench's wall-time ratios on one rank:
     docs/free_surface.md)."""
     def launch(case, ranks):
@@ -89,7 +90,7 @@ def test_free_surface_bench_pairs_each_scene_fixed_and_free():
 
     rows = free_surface_bench(1, 1, launch, ("Example 2, mu = 0",))
     fixed, free = rows
-    assert fixed["linear_solves"] == 14 and free["updates"] == 3 and free["linear_solves"] == 29
+    assert fixed["linear_solves"] == 14 and free["updates"] == 3 and free["linear_solves"] == 30
     assert free["size_change"] == pytest.approx(-0.0146, abs=1e-3)
-    assert free["solves_vs_fixed"] == pytest.approx(29 / 14) and free["time_vs_fixed"] > 1
+    assert free["solves_vs_fixed"] == pytest.approx(30 / 14) and free["time_vs_fixed"] > 1
     assert "| Example 2, mu = 0 | " in free_surface_table(rows)
