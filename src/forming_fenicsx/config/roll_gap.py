@@ -97,9 +97,11 @@ class RollingGeometry(_Strip):
 
     @property
     def cone_length(self) -> float:
-        """The contact length L = sqrt(R^2 - (R - dh/2)^2), the arc's projection on x."""
-        R = self.roll_radius
-        return math.sqrt(R**2 - (R - self.half_draft) ** 2)
+        """The contact length L = sqrt(R^2 - (R - dh/2)^2) = sqrt(dh/2 (2 R - dh/2)), the arc's
+        projection on x (the second form: R^2 overflowed for a radius of 1.3e154, a fuzzed
+        scene)."""
+        half = self.half_draft
+        return math.sqrt(half * (2.0 * self.roll_radius - half))
 
     @property
     def bite_angle(self) -> float:
