@@ -67,9 +67,8 @@ class FlowFields:
 
     def start_from_velocity(self) -> None:
         """(mixed) The solution's velocity part set from u and its pressure part from pressure: a
-        start from a given velocity (a restart, a free surface's next shape). Newton's steps are
-        increments of the solution; from a solution left at zero the first step of a warm
-        started wire on Q2 (mixed) was a solve of estimated error 1e300."""
+        start from a given velocity (a restart, a free surface's next shape), which Newton's
+        steps increment (docs/free_surface.md, step 7)."""
         if self.mixed:
             self.solution.x.array[self._velocity_dofs] = self.u.x.array
             self.solution.x.array[self._pressure_dofs] = self.pressure.x.array

@@ -377,18 +377,16 @@ class FlowProblem:
             coefficient.freeze(u)
 
     def carry_from(self, previous: FlowProblem, initial: dolfinx.fem.Function) -> None:
-        """A solved problem on another mesh of the workpiece carried over (mesh/transfer.py; node
-        for node where the mesh is the previous one's with its nodes moved, same_layout): its
-        velocity into ``initial`` (the iteration then may end from its second iterate on,
-        ``first_iterates``: the first moves the flow by about the shape's change, which can lie
-        below delta while the answer is further; ended there, the stainless strip demo's free
-        surface did not settle in 8 updates, and Example 2 on Q2 (mixed) at mu = 0.4 settled
-        after one update with 0.25 % crossing), and the augmented contact's multiplier
+        """A solved problem on another mesh of the workpiece carried over (mesh/transfer.py): its
+        velocity into ``initial``, node for node where the mesh is the previous one's with its
+        nodes moved (same_layout), and the augmented contact's multiplier
         (ContactMultiplier.start_from), without which a warm start's first iterate has the
-        penalty's contact pressure alone, and no friction bound (Coulomb's reads lambda)."""
-        # not the mixed formulation's: from a node-for-node start (its pressure carried or not)
-        # Newton's line search fell to 2**-12 for 100 steps on the 15 degree wire's second shape,
-        # which then took 420 solves by the fallback against 24 interpolated (not understood)
+        penalty's contact pressure alone, and no friction bound (Coulomb's reads lambda). The
+        iteration then may end from its second iterate on (``first_iterates``): the first moves
+        the flow by about the shape's change, which can lie below delta while the answer is
+        further (docs/free_surface.md, step 6)."""
+        # the mixed formulation is interpolated: node for node its Newton line search stalled
+        # (docs/free_surface.md, step 7)
         nodal = not self.mixed and same_layout(previous.u, self.u,
                                                (previous.facet_tags, self.facet_tags))
         transfer(previous.u, initial, nodal)

@@ -385,7 +385,7 @@ class NewtonSolver(SecantSolver):
             full = result.history[-1].step >= 1.0 or increment < ROUNDING
             settled = full and self._contact_settled(increment, increments)
             if (increment < settings.tolerance and settled
-                    and inner >= problem.first_iterates  # FlowProblem.carry_from
+                    and self._may_end(0, inner)
                     and problem.coupled_settled(problem.u, settings.coupling_tolerance)
                     and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"

@@ -222,6 +222,11 @@ class SecantSolver:
         result.reason = result.reason or messages.FIRST_SOLVE_NON_FINITE
         return False
 
+    def _may_end(self, outer: int, inner: int) -> bool:
+        """Whether the iteration may end at this iterate: a start carried from another shape's
+        flow not on its first (FlowProblem.first_iterates)."""
+        return outer > 0 or inner >= self.problem.first_iterates
+
     def _contact_settled(self, increment: float, increments: list[float]) -> bool:
         """The augmented contact's multiplier step after an iterate (FlowProblem.contact_settled);
         when it moves lambda, ``increments`` starts afresh: the divergence and stall checks then
@@ -283,8 +288,7 @@ class SecantSolver:
                 if outer_limit == 1:  # the direct method: the coupled fields froze every iterate
                     settled = settled and problem.coupled_settled(problem.u,
                                                                   settings.coupling_tolerance)
-                early = outer == 0 and inner < problem.first_iterates  # FlowProblem.carry_from
-                if increment < delta and settled and not early and (
+                if increment < delta and settled and self._may_end(outer, inner) and (
                         outer_limit > 1 or self._balanced(result)):
                     break
             else:
