@@ -129,10 +129,16 @@ class _Strip:
     @property
     def ideal_strain(self) -> float:
         """The equivalent strain of homogeneous deformation through the pass: ln(A0/A1), in plane
-        strain 2/sqrt3 ln(h0/h1)."""
+        strain 2/sqrt3 ln(h0/h1). Differences of logarithms: the ratio of two valid sizes can
+        underflow (A1/A0 of a 1e162 mm entry did)."""
+        def log_ratio(size: str) -> float:
+            entry, exit_ = getattr(self, f"entry_{size}"), getattr(self, f"exit_{size}")
+            return math.log(entry) - math.log(exit_)
         if self.shape == "strip":
-            return 2 / math.sqrt(3) * math.log(self.entry_thickness / self.exit_thickness)
-        return -math.log(self.area_ratio)
+            return 2 / math.sqrt(3) * log_ratio("thickness")
+        if self.shape == "rectangle":
+            return log_ratio("thickness") + log_ratio("width")
+        return 2 * log_ratio("thickness")
 
     @property
     def thinnest(self) -> float:
@@ -372,6 +378,9 @@ class _ProfiledDie(_Strip):
                                  + (' (a flat die face is geometry.die = "square")'
                                     if value == 90 and key == "die_angle"
                                     and isinstance(self, ConicalExtrusionGeometry) else ""))
+            if value is not None and math.tan(math.radians(value)) == 0:
+                raise SceneError(f"geometry.{key}", f"{value} degrees is too small for a cone: "
+                                 "its tangent underflows to 0 (a cone infinitely long)")
         for key in ("land_length", "entry_radius"):
             if not getattr(self, key) >= 0:
                 raise SceneError(f"geometry.{key}",

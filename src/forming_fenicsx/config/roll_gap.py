@@ -86,6 +86,11 @@ class RollingGeometry(_Strip):
                 setattr(self, key, relative * self.entry_thickness)
             check_positive(f"geometry.{key}", getattr(self, key))
         self.length = self.die_exit + self.exit_length
+        if not self.die_entry < self.die_exit < self.length:
+            raise SceneError("geometry.roll_radius", f"{self.roll_radius:.6g} makes a contact "
+                             f"length of {self.cone_length:.6g} against entry_length "
+                             f"{self.entry_length:.6g} and exit_length {self.exit_length:.6g}: "
+                             "the strip's lengths vanish beside it in double precision")
 
     def check_die(self) -> None:
         """Checked in resolve (the strip's length is derived)."""
