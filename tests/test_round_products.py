@@ -63,11 +63,12 @@ def test_back_tension_adds_to_the_drawing_stress(symmetry):
 
 
 def steel_wire(back_tension: float, mesh_size: float, out: Path | None = None,
-               penalty: dict | None = None) -> dict:
+               penalty: dict | None = None, iterations: int | None = None) -> dict:
     """An annealed low-carbon steel wire (Hollomon 530 MPa, n = 0.26, from zero strain: 106 MPa at
     the 0.2 % strain floor) drawn 5.5 -> 4.9 mm through a 6 degree die with a 1 mm land, mu =
-    0.05, 5 m/s, in mm and MPa, with the default penalties unless ``penalty`` gives its section;
-    its summary (``out``: written there by run_scene)."""
+    0.05, 5 m/s, in mm and MPa, with the default penalties unless ``penalty`` gives its section,
+    Newton's solver.max_iterations unless ``iterations`` gives it; its summary (``out``: written
+    there by run_scene)."""
     scene = scene_from_dict({
         **({"penalty": penalty} if penalty else {}),
         "process": {"kind": "drawing", "velocity": 5000.0,
@@ -76,7 +77,8 @@ def steel_wire(back_tension: float, mesh_size: float, out: Path | None = None,
                      "die_angle": 6.0, "land_length": 1.0},
         "material": {"name": "low_carbon_steel_annealed"}, "friction": {"mu": 0.05},
         "discretisation": {"averaging": "quadrature", "mesh_size": mesh_size},
-        "solver": {"method": "newton"}, "output": {"fields": False, "figures": False},
+        "solver": {"method": "newton", **({"max_iterations": iterations} if iterations else {})},
+        "output": {"fields": False, "figures": False},
         "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"}})
     return run_scene(scene, out) if out is not None else solve_scene(scene, quiet=True)[2]
 
@@ -85,12 +87,13 @@ def test_a_back_tension_near_the_stocks_yield_stress_is_named(shared_tmp):
     """The annealed steel wire with a back tension of 97 MPa, 0.915 of its stock's yield stress
     (106.05 MPa at its entry strain, the 0.2 % floor):
     it converges and warns (stock_yield), its drawing stress raised by 0.924 of the tension
-    (measured 119.54 -> 209.13 MPa on h = 0.2 mm; Sachs: (A1/A0)^B = 0.896). At 100 MPa (0.943) on
-    h = 0.1 mm Newton stopped as ill-conditioned: its reason leads with the back tension, then
-    the iteration's advice, larger penalties, which converges it (the contact's d_N 10 times the
-    default: 211.68 MPa in 19 solves, beside 211.94 on h = 0.2); its force-balance warning does
-    not send the user to solver.force_tolerance, and no exit_strain.csv is traced along the
-    stopped iterate's streamlines (that ran for over 25 minutes, its strain NaN)."""
+    (measured 119.54 -> 209.13 MPa on h = 0.2 mm; Sachs: (A1/A0)^B = 0.896). At 100 MPa (0.943)
+    on h = 0.1 mm Newton once stopped as ill-conditioned and told the user to enlarge the
+    penalties; since stop 64 it converges there (20 solves, 211.83 MPa beside 211.94 on h = 0.2),
+    so the stop is made here by solver.max_iterations: the reason of a run that stops near the
+    limit leads with the back tension, its force-balance warning does not send the user to
+    solver.force_tolerance, and no exit_strain.csv is traced along the stopped iterate's
+    streamlines (that once ran for over 25 minutes, its strain NaN)."""
     free, pulled = steel_wire(0.0, 0.2), steel_wire(97.0, 0.2)
     assert free["converged"] and pulled["converged"] and "stock_yield_ratio" not in free
     # 97 over Hollomon's 530 x 0.002^0.26 = 105.3 MPa at the strain floor, times the law's rate
@@ -99,17 +102,12 @@ def test_a_back_tension_near_the_stocks_yield_stress_is_named(shared_tmp):
     assert any("the back tension process.applied_force = 97 is 0.915 times" in w
                for w in pulled["warnings"])
     assert 0.85 < (pulled["drawing_stress"] - free["drawing_stress"]) / 97.0 < 0.95
-    near = steel_wire(100.0, 0.1, shared_tmp / "steel_wire_100")
-    if near["converged"]:  # this iteration's stop is not physics (h = 0.2 converges)
-        assert any("0.943 times" in w for w in near["warnings"])
-    else:
-        assert near["reason"].startswith("the back tension process.applied_force = 100 is 0.943")
-        assert not (shared_tmp / "steel_wire_100" / "exit_strain.csv").exists()
-        assert "use larger ones" in near["reason"]
-        assert not any("force_tolerance" in w for w in near["warnings"])
-        advised = steel_wire(100.0, 0.1, penalty={"d_N_relative": 1e-2})
-        assert advised["converged"] and not any("ill-cond" in w for w in advised["warnings"])
-        assert advised["drawing_stress"] == pytest.approx(211.94, rel=3e-3)
+    stopped = steel_wire(100.0, 0.2, shared_tmp / "steel_wire_100", iterations=4)
+    assert not stopped["converged"]
+    assert stopped["reason"].startswith("the back tension process.applied_force = 100 is 0.943")
+    assert not (shared_tmp / "steel_wire_100" / "exit_strain.csv").exists()
+    assert (shared_tmp / "steel_wire_100" / "summary.json").exists()
+    assert not any("force_tolerance" in w for w in stopped["warnings"])
 
 
 def test_friction_factor_below_avitzur_bound():

@@ -84,14 +84,14 @@ def product_top(problem: FlowProblem, x: float) -> float:
 
 def product_flow_stress(problem: FlowProblem, leaving: bool = True) -> float:
     """The drawn product's flow stress at the process strain rate: at its mean exit strain for a
-    hardening law (``leaving`` False: the stock's, at its mean entry strain), the scene's reference
-    flow stress otherwise."""
+    hardening law (``leaving`` False: the stock's, at the strain it flows in with, the law's
+    initial strain or its profile's section mean), the scene's reference flow stress otherwise.
+    The stock's is not read from the iterate's entry section: a stopped iterate carried 4e27
+    there (the steel wire at 0.943 of its stock's yield stress, Debian 13), and NaN before."""
     scene = problem.scene
     if problem.strain is None:
         return scene.reference_flow_stress
-    strain = mean_strain_through(problem, leaving)
-    if not leaving and not math.isfinite(strain):  # an iterate that stopped with a NaN strain: the
-        strain = scene.inflow_strain  # the stock's prescribed one (a profile's section mean)
+    strain = mean_strain_through(problem) if leaving else scene.inflow_strain
     return float(scene.material.flow_stress([scene.reference_strain_rate], strain)[0])
 
 
