@@ -63,14 +63,12 @@ def test_back_tension_adds_to_the_drawing_stress(symmetry):
 
 
 def steel_wire(back_tension: float, mesh_size: float, out: Path | None = None,
-               penalty: dict | None = None, iterations: int | None = None) -> dict:
+               iterations: int | None = None) -> dict:
     """An annealed low-carbon steel wire (Hollomon 530 MPa, n = 0.26, from zero strain: 106 MPa at
     the 0.2 % strain floor) drawn 5.5 -> 4.9 mm through a 6 degree die with a 1 mm land, mu =
-    0.05, 5 m/s, in mm and MPa, with the default penalties unless ``penalty`` gives its section,
-    Newton's solver.max_iterations unless ``iterations`` gives it; its summary (``out``: written
-    there by run_scene)."""
+    0.05, 5 m/s, in mm and MPa, with Newton's solver.max_iterations unless ``iterations`` gives
+    it; its summary (``out``: written there by run_scene)."""
     scene = scene_from_dict({
-        **({"penalty": penalty} if penalty else {}),
         "process": {"kind": "drawing", "velocity": 5000.0,
                     **({"applied_force": back_tension} if back_tension else {})},
         "geometry": {"symmetry": "axisymmetric", "entry_diameter": 5.5, "exit_diameter": 4.9,
