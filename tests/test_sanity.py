@@ -242,7 +242,8 @@ def test_a_hardening_strain_that_runs_away_is_named():
     5, a failure (and a cause) above 10: annealed copper through a square die converged with 29
     times it at the die's corner and twice the ram pressure (test_hardening.py). A strain below the
     entry's by more than half the ideal strain (-29.5 there) warns of the transport's
-    undershoot."""
+    undershoot. A stopped run's strain beyond any flow's (4e27, the iterate of a wire stopped on
+    Debian 13) is the iterate's: named, but not as the cause, which the iteration's reason gives."""
     scene = scene_from_dict({"process": {"kind": "extrusion"},
                              "material": {"name": "copper_annealed", "initial_strain": 0.3},
                              "units": {"length": "mm", "time": "s", "stress": "MPa"}})
@@ -258,6 +259,16 @@ def test_a_hardening_strain_that_runs_away_is_named():
     failed = checked(max_strain=37.59, max_strain_at=[59.94, 10.12])["strain_runaway"]
     assert failed.failure and "reaches 37.6 at (59.94, 10.12), 29.4 times" in failed.message
     assert f"A = {scene.reference_flow_stress:.4g}, n = 0.001" in failed.message
+    stopped = {f.check: f for f in check_run({**NORMAL, **hardening, "max_strain": 37.59},
+                                             scene, converged=False)}["strain_runaway"]
+    assert stopped.cause and "material that barely moves" in stopped.message
+    for garbage in (3.96e27, math.nan):  # a stopped iterate's transport (Debian 13), or none
+        found = {f.check: f for f in check_run({**NORMAL, **hardening, "max_strain": garbage},
+                                               scene, converged=False)}["strain_runaway"]
+        assert found.failure and not found.cause
+        assert "the stopped iterate's transported strain reaches" in found.message
+        assert "dead zone" in found.message and "A = " not in found.message
+    assert checked(max_strain=3.96e27)["strain_runaway"].cause  # converged: a flow's runaway
     under = checked(min_strain=-29.5)["strain_undershoot"]
     assert not under.failure and "falls to -29.5" in under.message
     plastic = {f.check for f in check_run({**NORMAL, "max_strain": 99.0}, SCENE)}
