@@ -185,8 +185,9 @@ def test_mean_flow_stress_over_a_pass(tmp_path, monkeypatch):
         law.mean_flow_stress(rate, 0.2, 0.2 + ideal), rel=1e-14)
     power = scene({"law": "rate_power", "A": 200.0, "n": 0.1})
     assert power.reference_flow_stress == power.material.flow_stress([rate])[0]
-    # a stopped iterate's NaN entry strain: the stock's flow stress at the profile's mean strain
-    # (0.2, 132.1 MPa), not at initial_strain's default 0 (before this, 11.0 MPa at the floor)
+    # the stock's flow stress at the profile's mean strain (0.2, 132.1 MPa), not at
+    # initial_strain's default 0 (11.0 MPa at the floor), nor at the iterate's entry strain, here
+    # made NaN as a stopped iterate's was (another carried 4e27)
     from types import SimpleNamespace
 
     from forming_fenicsx.post import product

@@ -250,8 +250,9 @@ def test_a_hardening_strain_that_runs_away_is_named():
     hardening = {"ideal_strain": 1.27, "max_strain": 0.3 + 4.4 * 1.27, "max_strain_at": [3, 4],
                  "min_strain": 0.3 - 0.4 * 1.27}
 
-    def checked(**changed) -> dict:
-        return {f.check: f for f in check_run({**NORMAL, **hardening, **changed}, scene)}
+    def checked(converged: bool = True, **changed) -> dict:
+        return {f.check: f
+                for f in check_run({**NORMAL, **hardening, **changed}, scene, converged)}
 
     assert not {"strain_runaway", "strain_undershoot"} & set(checked())
     warned = checked(max_strain=0.3 + 6 * 1.27)["strain_runaway"]
@@ -259,12 +260,10 @@ def test_a_hardening_strain_that_runs_away_is_named():
     failed = checked(max_strain=37.59, max_strain_at=[59.94, 10.12])["strain_runaway"]
     assert failed.failure and "reaches 37.6 at (59.94, 10.12), 29.4 times" in failed.message
     assert f"A = {scene.reference_flow_stress:.4g}, n = 0.001" in failed.message
-    stopped = {f.check: f for f in check_run({**NORMAL, **hardening, "max_strain": 37.59},
-                                             scene, converged=False)}["strain_runaway"]
+    stopped = checked(False, max_strain=37.59)["strain_runaway"]
     assert stopped.cause and "material that barely moves" in stopped.message
     for garbage in (3.96e27, math.nan):  # a stopped iterate's transport (Debian 13), or none
-        found = {f.check: f for f in check_run({**NORMAL, **hardening, "max_strain": garbage},
-                                               scene, converged=False)}["strain_runaway"]
+        found = checked(False, max_strain=garbage)["strain_runaway"]
         assert found.failure and not found.cause
         assert "the stopped iterate's transported strain reaches" in found.message
         assert "dead zone" in found.message and "A = " not in found.message
