@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from forming_fenicsx.core.errors import SceneError
-from forming_fenicsx.physics.flow_laws import PiecewisePowerLaw, PowerLaw
+from forming_fenicsx.physics.flow_laws import PiecewisePowerLaw, PowerLaw, rate_sensitivity
 
 
 def test_piecewise_power_law_branches():
@@ -80,6 +80,21 @@ def test_hardening_curves_and_rate_factors():
     assert voce.flow_stress([0.01], 0.2)[0] == pytest.approx(h * 0.1**0.03, rel=1e-12)
     assert hollomon.flow_stress([1e3], 0.3)[0] / hollomon.flow_stress([1e-3], 0.3)[0] == \
         pytest.approx(1e6**1e-3, rel=1e-12)  # rate_factor "none": the regularising exponent only
+
+
+def test_rate_sensitivity_is_the_laws_exponent():
+    """d ln sigma_p / d ln rate: alpha of (4.5) between rate1 and rate2 and 1 (linear) below
+    rate1, n of the rate power law, Swift's m, Hollomon's regularising 1e-3; Voce's log factor
+    C / (1 + C ln(rate/ref)) to the central difference's 2e-6."""
+    hollomon, swift, voce = hardening_laws()
+    law = PiecewisePowerLaw(A=2.0, alpha=0.2, rate1=1e-2, rate2=1e2)
+    assert rate_sensitivity(law, 1.0) == pytest.approx(0.2, rel=1e-12)
+    assert rate_sensitivity(law, 1e-4) == pytest.approx(1.0, rel=1e-12)
+    assert rate_sensitivity(PowerLaw(n=0.15).resolve(1.0), 7.0) == pytest.approx(0.15, rel=1e-12)
+    assert rate_sensitivity(swift, 3.0) == pytest.approx(0.05, rel=1e-12)
+    assert rate_sensitivity(hollomon, 3.0) == pytest.approx(1e-3, rel=1e-9)
+    assert rate_sensitivity(voce, 10.0) == pytest.approx(0.03 / (1 + 0.03 * math.log(100)),
+                                                         rel=1e-5)
 
 
 @pytest.mark.parametrize("index", [0, 1, 2])

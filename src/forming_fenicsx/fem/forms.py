@@ -18,6 +18,7 @@ from forming_fenicsx.physics import contact, friction, roll
 from forming_fenicsx.fem.boundary_filter import BoundaryFilter
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.physics.coordinates import CoordinateSystem
+from forming_fenicsx.physics.flow_laws import rate_sensitivity
 from forming_fenicsx.fem.contact_multiplier import ContactMultiplier
 from forming_fenicsx.fem.entry_speed import EntrySpeed
 from forming_fenicsx.fem.fields import FlowFields
@@ -145,6 +146,12 @@ class FlowProblem:
         if self.has_contact and scene.penalty.augmented:
             self.multiplier = ContactMultiplier(self.u, self.n, scene.penalty.d_N,
                                                 self.ds_contact, self.full_degree)
+        # rolling's factor law on a rate-sensitive metal: Newton's step carries the derivative of
+        # m k(rate) (newton.py), k read at the rate floor where the metal is rigid (yield_stress)
+        self.factor_bound_moves = (
+            self.rolling and self.has_friction and law.law == "factor"
+            and rate_sensitivity(scene.material, scene.reference_strain_rate)
+            >= friction.RATE_SENSITIVE)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction:
@@ -240,6 +247,13 @@ class FlowProblem:
         rate = self.equivalent_strain_rate(u)
         return self.scene.material.secant_ufl(rate, self.strain, self.temperature) * rate
 
+    def yield_stress(self, u):
+        """sigma_p at max(rate(u), rate floor): the flow stress, and in a rigid zone, where the
+        law's linear part below the floor stands for rigidity, the yield stress it stays below
+        (whose rate derivative is the law's, not the floor's 1/rate)."""
+        rate = ufl.max_value(self.equivalent_strain_rate(u), self.scene.material.rate_floor)
+        return self.scene.material.secant_ufl(rate, self.strain, self.temperature) * rate
+
     def after_solve(self) -> None:
         """Velocity (and pressure) from the solution of a linear system."""
         self.fields.after_solve()
@@ -286,12 +300,13 @@ class FlowProblem:
     def friction_bound(self):
         """tau_f at the friction state: Coulomb's mu sigma_N-bar, capped at k with
         friction.shear_limit, or the factor law's m k (friction.py)."""
-        law = self.scene.friction
+        law, state = self.scene.friction, self.friction_state.state
         if law.law == "factor":
-            return friction.factor_bound(law.m, self.flow_stress(self.friction_state.state))
+            k = self.yield_stress(state) if self.factor_bound_moves else self.flow_stress(state)
+            return friction.factor_bound(law.m, k)
         bound = friction.coulomb_bound(law.mu, self.normal_pressure())
         if law.shear_limit:
-            return friction.shear_limited(bound, self.flow_stress(self.friction_state.state))
+            return friction.shear_limited(bound, self.flow_stress(state))
         return bound
 
     def friction_coefficient(self):

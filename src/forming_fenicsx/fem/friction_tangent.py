@@ -1,7 +1,7 @@
 """The friction bound in Newton's step: the derivative of the residual through tau_f.
 
 Newton's residual F(u; s) reads the friction bound tau_f at the friction state s (Coulomb's
-mu sigma_N-bar(s), capped at k(s) with friction.shear_limit), and each
+mu sigma_N-bar(s), capped at k(s) with friction.shear_limit, or the factor law's m k(s)), and each
 step freezes s = u (newton.py). Its derivative is then
 
     J = A + K + B M^-1 C,
@@ -13,8 +13,9 @@ Gamma3), B = dF/dsigma_N-bar and C = db/ds. Without these terms the bound follow
 step late, and the last steps converge linearly (about 0.54 a step); with them the rolling grid's
 two slowest Coulomb points took 15 and 18 solves instead of 22 and 21 (docs/rolling.md). The terms
 join Newton's GMRES (tangent_gmres.py) as a Correction: K and C are not symmetric, and A keeps its
-own (symmetric) factorisation. Newton's step carries them in rolling only, and not the factor
-law's m k(s) (newton.py says why).
+own (symmetric) factorisation. Newton's step carries them in rolling only: Coulomb's bound, and
+the factor law's m k(s) on a rate-sensitive metal (FlowProblem.factor_bound_moves; newton.py says
+why not otherwise).
 """
 from __future__ import annotations
 

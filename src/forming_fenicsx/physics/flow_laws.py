@@ -484,6 +484,14 @@ class SellarsTegartLaw(_RateFloor):
                                at_floor * f / 2 + span * integral)
 
 
+def rate_sensitivity(law, rate: float) -> float:
+    """m = d ln sigma_p / d ln rate at ``rate`` (the law's own strain and temperature), a central
+    difference over a factor 1.1 either side: 0 for a rate-independent law above its floor, alpha of
+    (4.5) between rate1 and rate2, n of the rate power law."""
+    low, high = law.flow_stress(np.array([rate / 1.1, rate * 1.1]))
+    return float(np.log(high / low) / np.log(1.21))
+
+
 def _check_positive(section: str, key: str, value: float | None) -> None:
     if not (value is not None and value > 0):
         raise SceneError(f"{section}.{key}", f"must be a finite number > 0; got {value}")
