@@ -147,9 +147,10 @@ class FlowProblem:
             self.multiplier = ContactMultiplier(self.u, self.n, scene.penalty.d_N,
                                                 self.ds_contact, self.full_degree)
         # rolling's factor law on a rate-sensitive metal: Newton's step carries the derivative of
-        # m k(rate) (newton.py), k read at the rate floor where the metal is rigid (yield_stress)
+        # m k(rate) (newton.py), k read at the rate floor where the metal is rigid (yield_stress);
+        # not in the mixed formulation, where a steel pass at m = 1 then diverged (docs/rolling.md)
         self.factor_bound_moves = (
-            self.rolling and self.has_friction and law.law == "factor"
+            self.rolling and self.has_friction and law.law == "factor" and not self.mixed
             and rate_sensitivity(scene.material, scene.reference_strain_rate)
             >= friction.RATE_SENSITIVE)
         self.friction_state: FrozenVelocity | None = None
