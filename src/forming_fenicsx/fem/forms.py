@@ -245,14 +245,17 @@ class FlowProblem:
 
     def flow_stress(self, u):
         """sigma_p(rate(u)) of the material law, a UFL expression."""
-        rate = self.equivalent_strain_rate(u)
-        return self.scene.material.secant_ufl(rate, self.strain, self.temperature) * rate
+        return self._stress_at(self.equivalent_strain_rate(u))
 
     def yield_stress(self, u):
         """sigma_p at max(rate(u), rate floor): the flow stress, and in a rigid zone, where the
         law's linear part below the floor stands for rigidity, the yield stress it stays below
         (whose rate derivative is the law's, not the floor's 1/rate)."""
-        rate = ufl.max_value(self.equivalent_strain_rate(u), self.scene.material.rate_floor)
+        return self._stress_at(ufl.max_value(self.equivalent_strain_rate(u),
+                                             self.scene.material.rate_floor))
+
+    def _stress_at(self, rate):
+        """sigma_p = G(rate) rate at the strain and temperature the law reads."""
         return self.scene.material.secant_ufl(rate, self.strain, self.temperature) * rate
 
     def after_solve(self) -> None:
