@@ -324,6 +324,27 @@ def test_a_sticking_pass_of_a_rate_sensitive_steel_converges_to_its_answer():
     assert abs(summary["power_balance"]["residual"]) < 1e-3
 
 
+def test_a_sticking_pass_of_a_hardening_copper_keeps_the_strains_gmres_iterate():
+    """A new user's cold pass (stop 67): annealed copper (Hollomon, K = 315 MPa, n = 0.54, its
+    strain transported) 4 -> 3 mm between rolls of 100 mm radius at 500 mm/s, sticking (m = 1), mm
+    and MPa. Newton's step carries the strain's derivative, and where GMRES stopped short of its
+    tolerance (30 iterations) it took the frozen step: 26 linear solves, the roll force 6.9e-4
+    below its answer (3182.8 against 3185.017 N/mm, which delta = 1e-7 gives). GMRES's last
+    iterate, whose residual is at most the frozen step's, now stands: 19 solves, within 1e-4. (An
+    8 -> 5 mm pass at R = 300 mm and 1.5 m/s failed after 448 solves; it now takes 24.)"""
+    scene = scene_from_dict({
+        "process": {"kind": "rolling", "velocity": 500.0},
+        "geometry": {"entry_thickness": 4.0, "exit_thickness": 3.0, "roll_radius": 100.0},
+        "material": {"name": "copper_annealed"}, "friction": {"law": "factor", "m": 1.0},
+        "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
+        "output": {"fields": False, "figures": False}})
+    _, _, summary = solve_scene(scene, quiet=True)
+    assert summary["converged"] and summary["linear_solves"] <= 20
+    assert summary["roll_force"] == pytest.approx(3185.017, rel=3e-4)
+    assert summary["roll_torque"] == pytest.approx(13969.698, rel=3e-4)
+    assert abs(summary["power_balance"]["residual"]) < 1e-3
+
+
 def test_coulomb_friction_is_capped_at_the_shear_flow_stress():
     """R/h1 = 200, 40 %, mu = 0.3 (dimensionless, the grid's): mu p exceeds k (up to 2.9 k) at 44 %
     of the arc's nodes, where the metal shears beneath the surface. Capped at k

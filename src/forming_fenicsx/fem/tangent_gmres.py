@@ -63,9 +63,12 @@ class TangentGMRES:
         for correction in self.corrections:
             correction.add_to(x, y)
 
-    def solve(self, F: PETSc.Vec, du: PETSc.Vec, corrections: Sequence[Correction]) -> bool:
+    def solve(self, F: PETSc.Vec, du: PETSc.Vec, corrections: Sequence[Correction],
+              keep: bool = False) -> bool:
         """J du = F by GMRES from du (A^-1 F on entry, A and its factors at the current u), each
-        correction assembled first; True when it converged, else du is left as it came."""
+        correction assembled first; True when it converged. Otherwise du is GMRES's last iterate
+        when ``keep`` (its residual ||F - J du|| is at most the start's: GMRES minimises it over
+        a space holding the start), else left as it came."""
         self.corrections = corrections
         for correction in corrections:
             correction.assemble()
@@ -73,7 +76,7 @@ class TangentGMRES:
         self._ksp.solve(F, du)
         converged = self._ksp.getConvergedReason() > 0
         self.iterations = self._ksp.getIterationNumber()
-        if not converged:
+        if not converged and not keep:
             self._start.copy(du)
         return converged
 

@@ -204,10 +204,16 @@ class NewtonSolver(SecantSolver):
         if corrections:
             error = self._estimate()  # of A's solve, before du moves
             self._estimate = lambda: error
-            converged = self.tangent.solve(self.newton.b, du, corrections)
+            # GMRES stopped short: the strain's step keeps its last iterate (a cold copper pass
+            # at m = 1 failed with the frozen step); the friction bound's, near sticking where J
+            # is near singular, the frozen step (two steel passes then stopped unconverged;
+            # docs/hardening.md)
+            keep = not self._friction_in_tangent
+            converged = self.tangent.solve(self.newton.b, du, corrections, keep)
+            fallback = "its last iterate" if keep else "the frozen step"
             coupled = (f"  {', '.join(c.name for c in corrections)} in the tangent: "
                        f"{self.tangent.iterations} GMRES iterations") \
-                + ("" if converged else " (not converged: the frozen step)")
+                + ("" if converged else f" (not converged: {fallback})")
         slope = self.newton.b.dot(du)  # F.dw > 0 when -dw is a descent direction of Phi
         energy0 = self.energy_value()
         forms.step.x.scatter_forward()
