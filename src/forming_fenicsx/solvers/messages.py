@@ -126,6 +126,20 @@ def no_convergence(iterations: int, increment: float, delta: float, balance: str
             f"{delta:g}{balance})")
 
 
+def slow_convergence(iterations: int, increments: list[float], rho: float, delta: float) -> str:
+    """Why a rolling run whose increments met delta did not end (newton.py, _rate_settled)."""
+    if rho < 1.0:  # False for NaN: the last steps were not of one kind
+        rate = (f"fall by only {rho:.3f} a step, so the answer may lie "
+                f"{increments[-1] * rho / (1.0 - rho):.1e} (||du||/||u||) away")
+    else:
+        rate = "do not fall steadily enough to bound the distance to the answer"
+    return (f"not converged in {iterations} Newton steps: the increments met delta = {delta:g} but "
+            f"{rate} (last increments {recent(increments)}). Near sticking the friction bound's "
+            "derivative makes Newton's operator nearly singular and the steps creep along the "
+            "stick zone's slip; raise solver.max_iterations (steel strips rolled at m = 1 took "
+            "76, 123 and 245 solves to converge, docs/rolling.md)")
+
+
 def outer_stalled(outer_increments: list[float]) -> str:
     return (f"the friction (outer) loop stalls or oscillates: outer changes "
             f"{recent(outer_increments)}; at this friction coefficient the solution may not be "

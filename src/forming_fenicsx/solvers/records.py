@@ -34,7 +34,9 @@ class IterationRecord:
 
 
 # why an iteration stops unconverged (SolveResult.cause)
-STOP_CAUSES = ("stop", "ill_conditioned", "non_finite", "diverging", "stalled", "max_iterations")
+# "slow": the increments met delta but fell too slowly to bound the distance to the answer
+STOP_CAUSES = ("stop", "ill_conditioned", "non_finite", "diverging", "stalled", "max_iterations",
+               "slow")
 
 
 @dataclass

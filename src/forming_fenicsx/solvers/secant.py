@@ -169,12 +169,16 @@ class SecantSolver:
                                                settings.method, self.problem.has_friction)
             result.cause = "diverging"
             return True
-        if stalled(increments, settings.stall_window):
+        if stalled(increments, self._stall_window()):
             result.reason = messages.stalled(settings.stall_window, increments, outer, inner,
                                              friction_note)
             result.cause = "stalled"
             return True
         return False
+
+    def _stall_window(self) -> int:
+        """The iterations without a new smallest increment that make a stall."""
+        return self.settings.stall_window
 
     def _stop_reason(self) -> str | None:
         """The stop request of any rank, agreed on by all (a collective call)."""
