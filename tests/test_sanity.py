@@ -280,11 +280,11 @@ def test_a_tension_no_friction_can_roll_against_is_named():
     friction: the tension is above the strip's yield stress in plane-strain tension at the pass's
     mean flow stress (2k = 132.8 MPa), which no friction rolls against. A tension below it keeps
     the slab solution's least mu and the advice to raise the friction."""
-    def skidded(front: float) -> str:
+    def skidded(front: float, speed: float = 3.0) -> str:
         scene = scene_from_dict({"process": {"kind": "rolling", "front_tension": front},
                                  "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6,
                                               "roll_radius": 20.0}, "friction": {"mu": 0.05}})
-        found = bite({**NORMAL, "entry_speed": 3.0, "neutral_x": math.nan}, scene)
+        found = bite({**NORMAL, "entry_speed": speed, "neutral_x": math.nan}, scene)
         assert found.failure and found.cause
         return found.message
 
@@ -293,3 +293,17 @@ def test_a_tension_no_friction_can_roll_against_is_named():
     assert "Lower the tensions" in pulled and "Raise the friction" not in pulled
     mild = skidded(0.2)
     assert "the slab solution needs mu above" in mild and "Raise the friction" in mild
+    assert "the strip enters at 3 times the rolls' speed" in mild  # the scene's velocity is 1
+
+
+@pytest.mark.parametrize("speed", [-7.43e5, 66.8])
+def test_a_strip_speed_no_strip_has_is_the_iteration_s(speed):
+    """The demo strip at a back tension of 150 MPa stopped with "the strip enters at -7.43e+05
+    times the rolls' speed", the aluminium pass at a front tension of 155 MPa at 66.8 times: the
+    iteration ran away with the strip's speed, and the message says so (stop 68)."""
+    scene = scene_from_dict({"process": {"kind": "rolling", "back_tension": 0.3},
+                             "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.6,
+                                          "roll_radius": 20.0}, "friction": {"mu": 0.2}})
+    message = bite({**NORMAL, "entry_speed": speed, "neutral_x": math.nan}, scene).message
+    assert f"the iteration ran away with the strip's speed, which it left at {speed:.3g}" in message
+    assert "the strip enters at" not in message and "Raise the friction" in message
