@@ -11,9 +11,9 @@ full step would not yet meet delta (line_search.py). It stops with the rule of (
 Newton step, ||du|| / ||u|| < delta (on the step taken when that was longer) after a step taken in
 full, and the force balance if solver.force_tolerance is set; in rolling with the friction bound's
 derivative in the step, only once the last steps' rate bounds the distance to the answer
-(_rate_settled). The history counts the semismooth
-switches of each step (flow-law branch at the Gauss points, contact set at the die nodes), which
-keep the convergence from being quadratic on fine meshes.
+(_rate_settled). The history counts the semismooth switches of each step (flow-law branch at the
+Gauss points, contact set at the die nodes), which keep the convergence from being quadratic on
+fine meshes.
 """
 from __future__ import annotations
 
@@ -467,8 +467,7 @@ class NewtonSolver(SecantSolver):
                     and self._balanced(result)):
                 result.converged, result.reason = True, "increment below tolerance"
                 return result
-        if self._met:
-            self._rate_settled(increments)  # the last steps' rate, for the message
+        if self._met and not self._rate_settled(increments):
             result.reason = messages.slow_convergence(settings.max_iterations, increments,
                                                       self._rate, settings.tolerance)
             result.cause = "slow"  # no fallback: the direct method creeps too
@@ -491,6 +490,7 @@ class NewtonSolver(SecantSolver):
             log.warning("%s: the direct method (3.13) goes on from the secant start's iterate",
                         failed)
         self.settings = dataclasses.replace(self.settings, method="direct")
+        self._met = False  # the direct method's stalls count
         self.problem.restore(self._coupled_start)
         # from an early iterate, with the coefficients it had: not a start near the answer
         direct = SecantSolver._iterate(self, self._newton_start, near_answer=False)
