@@ -128,7 +128,7 @@ def no_convergence(iterations: int, increment: float, delta: float, balance: str
 
 def slow_convergence(iterations: int, increments: list[float], rho: float, delta: float) -> str:
     """Why a rolling run whose increments met delta did not end (newton.py, _rate_settled)."""
-    if rho < 1.0:  # False for NaN: the last steps were not of one kind
+    if rho < 1.0:  # False for NaN: the last steps were not three full frozen ones
         rate = (f"fall by only {rho:.3f} a step, so the answer may lie "
                 f"{increments[-1] * rho / (1.0 - rho):.1e} (||du||/||u||) away")
     else:
@@ -137,7 +137,7 @@ def slow_convergence(iterations: int, increments: list[float], rho: float, delta
             f"{rate} (last increments {recent(increments)}). Near sticking the friction bound's "
             "derivative makes Newton's operator nearly singular and the steps creep along the "
             "stick zone's slip; raise solver.max_iterations (steel strips rolled at m = 1 took "
-            "76, 123 and 245 solves to converge, docs/rolling.md)")
+            "76, 124 and 245 solves to converge, docs/rolling.md)")
 
 
 def outer_stalled(outer_increments: list[float]) -> str:

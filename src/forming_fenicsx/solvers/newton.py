@@ -339,7 +339,7 @@ class NewtonSolver(SecantSolver):
         they creep along the stick zone's slip, rising and falling (from 1.8e-5 to 4.7e-5 and down
         to 1e-6 a step in the 2 -> 1.4 mm strip, one cut step at 1.5e-4 in the 5 -> 4 mm one), and
         the direct method a stall falls back on meets delta further from the answer (12 % and
-        5.8 % below their roll forces)."""
+        5.8 % below their roll forces without the force balance's stop; docs/rolling.md)."""
         return sys.maxsize if self._met else self.settings.stall_window
 
     def _lowers_residual(self) -> bool:
@@ -425,6 +425,7 @@ class NewtonSolver(SecantSolver):
         result = SolveResult(converged=False, reason="")
         result.outer_iterations = 1
         self._solve_failure = ""
+        self._steps, self._met = [], False  # this solve's (a coupled run solves again)
         if not self._start(initial, result, start):
             return result
         friction_note = messages.newton_friction_note(problem.scene, settings.tolerance,
@@ -444,7 +445,6 @@ class NewtonSolver(SecantSolver):
         self.keep_previous()  # the first operator's previous iterate: its contact set is u's
         self._branches = self._active = None  # count_switches starts afresh
         self._friction_in_tangent = False
-        self._steps, self._met = [], False
         increments = []
         for inner in range(1, settings.max_iterations + 1):
             increment = self._newton_step(result, inner, start)
