@@ -210,6 +210,27 @@ def test_the_friction_factor_on_an_unpressed_roll_warns():
         f.check for f in check_run({**rolled, "unpressed_friction_torque": -5e5}, scene)}
 
 
+def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
+    """Rolling: the share of the friction's torque at the metal's shear strength (measured 83 % on
+    a steel pass at m = 1, 52 % capped Coulomb at mu = 0.3; docs/sanity.md) warns above 10 %, with
+    the fix of the friction law: d_T halved for the factor law, the cap off for Coulomb's."""
+    rolled = {**NORMAL, "roll_torque": 1.7e5, "neutral_angle": 2.9, "bite_angle": 7.0,
+              "forward_slip": 0.11}
+    for law, fix in (({"law": "factor", "m": 1.0}, "friction.d_T_relative = 0.0005"),
+                     ({"mu": 0.3, "shear_limit": True}, "friction.shear_limit = false")):
+        scene = scene_from_dict({"process": {"kind": "rolling", "velocity": 1500.0},
+                                 "geometry": {"entry_thickness": 8.0, "exit_thickness": 5.0,
+                                              "roll_radius": 200.0},
+                                 "material": {"law": "rate_power", "A": 150.0, "n": 0.15},
+                                 "friction": law})
+        found = {f.check: f for f in check_run({**rolled, "friction_at_strength_share": 0.83},
+                                               scene)}
+        message = found["friction_at_strength"].message
+        assert "over 83 % of the friction's torque" in message and fix in message
+        assert "friction_at_strength" not in {f.check for f in check_run(
+            {**rolled, "friction_at_strength_share": 0.09}, scene)}
+
+
 def test_a_back_tension_near_the_stocks_yield_stress_is_named():
     """A drawing's back tension over the stock's yield stress in tension: silent at 0.75, a
     warning (and the cause a stopped run leads its reason with) above 0.8; above 1 a failure for a

@@ -30,10 +30,8 @@ PROCESS_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
     },
     # rolling (docs/rolling.md): Newton, the pure-penalty contact, and the x forces balanced to
     # 1e-4: the torque is the difference of the friction on both sides of the neutral point, off
-    # by 2 % with the increment's rule alone and by 0.1 % at 1e-3; Coulomb's bound capped at k,
-    # which long gaps at mu = 0.2, 0.3 exceed (up to 46 linear solves without, 22 with)
+    # by 2 % with the increment's rule alone and by 0.1 % at 1e-3 (Coulomb's cap at k: Scene)
     "rolling": {
-        "friction": {"shear_limit": True},
         "solver": {"method": "newton", "force_tolerance": 1e-4},
         "discretisation": {"averaging": "quadrature"},
         "penalty": {"augmented": False},

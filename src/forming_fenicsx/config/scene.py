@@ -32,7 +32,8 @@ from forming_fenicsx.config.strain_profile import (check_section, read_strain_pr
                                                    section_mean)
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import TIMES, Units
-from forming_fenicsx.physics.flow_laws import FlowLaw
+from forming_fenicsx.physics.flow_laws import FlowLaw, rate_sensitivity
+from forming_fenicsx.physics.friction import RATE_SENSITIVE
 
 
 # The default mesh size over the exit half-thickness: about 5 elements across it (Example 1's 0.5),
@@ -91,6 +92,8 @@ class Scene:
         rolling = self.process.kind == "rolling"
         self.penalty.resolve(scales, ROLLING_D_N_RELATIVE if rolling else D_N_RELATIVE)
         self.friction.resolve(scales, ROLLING_D_T_RELATIVE if rolling else D_T_RELATIVE)
+        if self.friction.shear_limit is None:
+            self.friction.shear_limit = rolling and not self.rate_sensitive
         relative = (MESH_SIZE_RELATIVE_3D if self.geometry.three_dimensional
                     else MESH_SIZE_RELATIVE[self.process.kind])
         self.discretisation.resolve(self.geometry.thinnest, relative)
@@ -207,6 +210,17 @@ class Scene:
         """Whether the flow law reads a transported field at the integration points: the strain
         of a hardening law, or the [thermal] temperature of a law that heats."""
         return self.material.hardens or (self.material.heats and self.thermal is not None)
+
+    @property
+    def rate_sensitive(self) -> bool:
+        """Whether the flow law's d ln sigma_p / d ln rate at the reference strain rate is at least
+        friction.RATE_SENSITIVE. Rolling caps Coulomb's bound at k only on a metal that is not:
+        long gaps at mu = 0.2, 0.3 on the slab grid's nearly rate-independent law took up to 46
+        linear solves without the cap, 22 with. On a rate-sensitive metal the surface layer bounds
+        the friction at its own rate, and the cap at k of the element's rate left the roll force
+        up to 1.9 % below its d_T -> 0 limit, moving by 0.3 to 0.9 % for d_T doubled
+        (docs/rolling.md)."""
+        return rate_sensitivity(self.material, self.reference_strain_rate) >= RATE_SENSITIVE
 
     @property
     def reference_strain_rate(self) -> float:

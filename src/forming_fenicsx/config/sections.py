@@ -102,8 +102,9 @@ class Friction:
 
     Coulomb's bound uses the averaged (mollified) normal stress over ``mollification_length``
     (default: the mesh size), or the local penalty stress of (3.4). ``shear_limit`` caps it at the
-    shear flow stress, tau_f = min(mu sigma_N-bar, k) (rolling's default; off elsewhere, the
-    paper's law: docs/rolling.md); the factor law never exceeds k.
+    shear flow stress, tau_f = min(mu sigma_N-bar, k) (default: in rolling on a metal that is not
+    rate-sensitive; off elsewhere, the paper's law, and on a rate-sensitive metal, whose surface
+    layer bounds the friction at its own rate: docs/rolling.md); the factor law never exceeds k.
     """
 
     law: str = "coulomb"
@@ -113,7 +114,7 @@ class Friction:
     d_T_relative: float | None = None
     normal_stress: str = "averaged"
     mollification_length: float | None = None
-    shear_limit: bool = False
+    shear_limit: bool | None = None
 
     @property
     def coefficient(self) -> float:

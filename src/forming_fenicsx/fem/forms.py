@@ -18,7 +18,6 @@ from forming_fenicsx.physics import contact, friction, roll
 from forming_fenicsx.fem.boundary_filter import BoundaryFilter
 from forming_fenicsx.core.compat import function_space
 from forming_fenicsx.physics.coordinates import CoordinateSystem
-from forming_fenicsx.physics.flow_laws import rate_sensitivity
 from forming_fenicsx.fem.contact_multiplier import ContactMultiplier
 from forming_fenicsx.fem.entry_speed import EntrySpeed
 from forming_fenicsx.fem.fields import FlowFields
@@ -151,8 +150,7 @@ class FlowProblem:
         # not in the mixed formulation, where a steel pass at m = 1 then diverged (docs/rolling.md)
         self.factor_bound_moves = (
             self.rolling and self.has_friction and law.law == "factor" and not self.mixed
-            and rate_sensitivity(scene.material, scene.reference_strain_rate)
-            >= friction.RATE_SENSITIVE)
+            and scene.rate_sensitive)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction:

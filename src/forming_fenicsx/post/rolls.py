@@ -101,6 +101,33 @@ def neutral_point(x: np.ndarray, slip: np.ndarray) -> float:
     return float(x[i] + (x[i + 1] - x[i]) * -slip[i] / (slip[i + 1] - slip[i]))
 
 
+# the friction stress "at the metal's shear strength": within this fraction of k
+STRENGTH_MARGIN = 0.01
+
+
+def bound_reaches_strength(problem: FlowProblem) -> bool:
+    """Whether the friction bound can reach the shear flow stress k of a rate-sensitive metal: the
+    factor law at m > 1 - STRENGTH_MARGIN, or Coulomb's capped at k (friction.shear_limit)."""
+    law = problem.scene.friction
+    reaches = law.m > 1.0 - STRENGTH_MARGIN if law.law == "factor" else law.shear_limit
+    return problem.has_contact and problem.has_friction and reaches and problem.scene.rate_sensitive
+
+
+def strength_share(problem: FlowProblem) -> float:
+    """int |tau . w| over the arc where |tau| >= (1 - STRENGTH_MARGIN) k, k = sigma_p/sqrt(3) as the
+    factor law reads it (at the rate floor in a rigid zone), over int |tau . w|: the share of the
+    friction's torque, before and after the neutral point alike, given at the metal's shear
+    strength. There the slip splits between the interface and the metal under it as the slip
+    regularisation d_T decides (docs/rolling.md)."""
+    tau = problem.friction_traction()
+    torque = abs(ufl.dot(tau, problem.tool_velocity))
+    k = problem.yield_stress(problem.u) / 3.0**0.5
+    at = ufl.conditional(ufl.ge(ufl.sqrt(ufl.dot(tau, tau)), (1.0 - STRENGTH_MARGIN) * k), 1.0,
+                         0.0)
+    total = integrate(problem, torque * problem.ds_contact)
+    return integrate(problem, torque * at * problem.ds_contact) / total if total > 0 else 0.0
+
+
 def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) -> dict[str, Any]:
     """Roll force (the separating force on each roll, per unit width), torque per roll and the
     rolls' power, the strip's entry and exit speeds, the forward slip S = v_1/v_R - 1, the neutral
@@ -123,7 +150,9 @@ def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) ->
         "unpressed_friction_torque": integrate(problem, ufl.dot(
             problem.friction_traction(), problem.tool_velocity) * unpressed(problem)
             * problem.ds_contact) * R / v_R}
-    return {"roll_torque": balance["roll_power"] * R / v_R, **unpressed_torque,
+    at_strength = {} if not bound_reaches_strength(problem) else {
+        "friction_at_strength_share": strength_share(problem)}
+    return {"roll_torque": balance["roll_power"] * R / v_R, **unpressed_torque, **at_strength,
             "roll_power": balance["roll_power"],
             "entry_speed": v0, "exit_speed": v1, "forward_slip": v1 / v_R - 1.0,
             "neutral_x": neutral, "neutral_angle": angle,

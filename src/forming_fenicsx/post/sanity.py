@@ -21,6 +21,7 @@ correct and broken runs):
 | a hardening law's strain below the entry strain / the ideal strain | 0.5 | |
 | free_surface_crossing | 5 % | 20 % |
 | factor friction where the die is not pressed, over the product's section / answer | 1 % | |
+| rolling: friction at a rate-sensitive metal's shear strength / the friction's torque | 10 % | |
 | die_contact_fraction | | 0 (no contact at all) |
 | estimated linear-solve error / solver.tolerance | 1 % | |
 | force_balance_residual (x forces of the driving face, the die and Gamma5) | 1 % | 5 % |
@@ -53,6 +54,7 @@ STRAIN_UNDERSHOOT = 0.5      # the entry strain less the smallest, over the idea
 STRAIN_NOT_A_FLOWS = 1e6
 FREE_SURFACE = (0.05, 0.2)
 UNPRESSED_FRICTION = 0.01
+STRENGTH_FRICTION = 0.1
 ABOVE_RATE2 = 0.1
 BELOW_FLOOR = 0.5
 FORCE_BALANCE = (0.01, 0.05)
@@ -335,8 +337,31 @@ def _unpressed_roll(summary: dict[str, Any]) -> Finding | None:
                    "rolls (its contact pressure is zero there, near the exit): that friction's "
                    f"torque is about {100 * share:.2g} % of the roll torque. The roll gap holds "
                    "the strip on the rolls there, and the factor law, unlike Coulomb's mu p, does "
-                   "not vanish with the pressure: Coulomb friction (friction.law = \"coulomb\", "
-                   "capped at k by default) gives none there")
+                   "not vanish with the pressure: Coulomb friction (friction.law = \"coulomb\") "
+                   "gives none there")
+
+
+def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """Rolling: the share of the friction's torque given at a rate-sensitive metal's shear
+    strength k (the factor law at m = 1, or Coulomb's cap at k), where the slip regularisation
+    d_T splits the slip between the interface and the metal under it: the roll force then moves
+    by 0.3 to 1 % when d_T doubles (docs/sanity.md)."""
+    share = summary.get("friction_at_strength_share", 0.0)
+    if not share > STRENGTH_FRICTION:
+        return None
+    law = scene.friction
+    half = f"friction.d_T_relative = {law.d_T_relative / 2:.3g} (half of this run's)"
+    fix = (f"Rerun with {half} to see how far: the answer moves toward its d_T -> 0 limit, "
+           "which lay 1.8 % above a steel pass's default at m = 1" if law.law == "factor" else
+           "With friction.shear_limit = false (the default on a rate-sensitive metal) the metal "
+           "under the surface bounds the friction at its own rate, and d_T moves the roll force "
+           f"by 0.1 % or less; or rerun with {half} to see how far")
+    return Finding("friction_at_strength",
+                   "the friction stress reaches the metal's shear strength k over "
+                   f"{100 * share:.2g} % of the friction's torque on the rolls, and the metal is "
+                   "rate-sensitive: there the slip regularisation friction.d_T decides how the "
+                   "slip splits between the interface and the metal under it, and the roll force "
+                   f"moves by 0.3 to 1 % when d_T doubles. {fix}")
 
 
 def _update_applies(scene: Scene) -> bool:
@@ -531,6 +556,6 @@ def check_run(summary: dict[str, Any], scene: Scene, converged: bool = True) -> 
     found += drawability(summary, scene, found)
     found += heat(summary, scene)
     found += [f for f in (free_surfaces(summary, scene), unpressed_friction(summary, scene),
-                          solve_accuracy(summary, scene), force_balance(summary, scene, converged))
-              if f is not None]
+                          friction_at_strength(summary, scene), solve_accuracy(summary, scene),
+                          force_balance(summary, scene, converged)) if f is not None]
     return found
