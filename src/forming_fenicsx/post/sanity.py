@@ -352,7 +352,7 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
     law = scene.friction
     half = f"friction.d_T_relative = {law.d_T_relative / 2:.3g} (half of this run's)"
     fix = (f"Rerun with {half} to see how far: the answer moves toward its d_T -> 0 limit, "
-           "which lay 1.8 % above a steel pass's default at m = 1" if law.law == "factor" else
+           "which lay about 1.9 % above a steel pass's default at m = 1" if law.law == "factor" else
            "With friction.shear_limit = false (the default on a rate-sensitive metal) the metal "
            "under the surface bounds the friction at its own rate, and d_T moves the roll force "
            f"by 0.1 % or less; or rerun with {half} to see how far")
