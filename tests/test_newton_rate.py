@@ -16,6 +16,7 @@ def _solver(steps: list[tuple[bool, bool]], tangent: bool = True) -> NewtonSolve
     """A NewtonSolver holding only what the rule reads: the steps' kinds (frozen, full)."""
     solver = NewtonSolver.__new__(NewtonSolver)
     solver.friction_tangent = object() if tangent else None
+    solver._rate_rule = tangent
     solver.settings = SimpleNamespace(tolerance=DELTA, stall_window=40)
     solver._steps, solver._rate, solver._met = steps, math.nan, False
     return solver

@@ -350,7 +350,9 @@ def test_coulombs_bound_on_a_rate_sensitive_steel_is_not_capped_at_k():
                 "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
                 "output": {"fields": False, "figures": False}})
             assert scene.friction.shear_limit is bool(cap)
-            found[cap, d_T] = solve_scene(scene, quiet=True)[2]
+            problem, _, found[cap, d_T] = solve_scene(scene, quiet=True)
+            # the rate rule of Newton's ending (newton.py) holds only where the bound reaches k
+            assert problem.bound_reaches_strength is bool(cap)
     assert all(summary["converged"] for summary in found.values())
     free, capped = found[None, 1e-3], found[True, 1e-3]
     assert free["roll_force"] == pytest.approx(15380.4, rel=3e-4)
@@ -397,6 +399,7 @@ def test_coulomb_friction_is_capped_at_the_shear_flow_stress():
         k = scene.reference_flow_stress / math.sqrt(3.0)
         problem, _, summary = solve_scene(scene)
         found[cap] = summary, die_profile(problem)
+        assert not problem.bound_reaches_strength  # a law that is not rate-sensitive
     (capped, arc), (uncapped, free_arc) = found[True], found[False]
     # capped by default on a law that is not rate-sensitive (alpha = 1e-3), and nothing warns
     assert _dimensionless(200.0, 0.4, {"law": "coulomb", "mu": 0.3}).friction.shear_limit

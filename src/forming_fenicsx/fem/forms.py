@@ -151,6 +151,14 @@ class FlowProblem:
         self.factor_bound_moves = (
             self.rolling and self.has_friction and law.law == "factor" and not self.mixed
             and scene.rate_sensitive)
+        # rolling's bound that can reach a rate-sensitive metal's shear strength k (the factor law
+        # at m > 0.99, Coulomb's capped at k): there the slip regularisation d_T splits the slip
+        # between the interface and the metal under it, nearly freely (docs/rolling.md)
+        reaches = law.m > 1.0 - friction.STRENGTH_MARGIN if law.law == "factor" \
+            else law.shear_limit
+        self.bound_reaches_strength = bool(
+            self.rolling and self.has_contact and self.has_friction and reaches
+            and scene.rate_sensitive)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction:

@@ -34,6 +34,8 @@ def factor_bound(m: float, flow_stress):
 # off); with the derivative the near rate-independent law of the slab grid (alpha = 1e-3) took six
 # of its sticking rows above 20 solves instead of two
 RATE_SENSITIVE = 0.01
+# a friction stress within this fraction of k is "at the metal's shear strength" (post/rolls.py)
+STRENGTH_MARGIN = 0.01
 
 
 def shear_limited(bound, flow_stress):

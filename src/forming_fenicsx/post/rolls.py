@@ -17,7 +17,7 @@ import ufl
 
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
-from forming_fenicsx.physics.friction import tangential
+from forming_fenicsx.physics.friction import STRENGTH_MARGIN, tangential
 from forming_fenicsx.post.forces import factor_friction, unpressed
 from forming_fenicsx.post.integrals import integrate
 
@@ -101,18 +101,6 @@ def neutral_point(x: np.ndarray, slip: np.ndarray) -> float:
     return float(x[i] + (x[i + 1] - x[i]) * -slip[i] / (slip[i + 1] - slip[i]))
 
 
-# the friction stress "at the metal's shear strength": within this fraction of k
-STRENGTH_MARGIN = 0.01
-
-
-def bound_reaches_strength(problem: FlowProblem) -> bool:
-    """Whether the friction bound can reach the shear flow stress k of a rate-sensitive metal: the
-    factor law at m > 1 - STRENGTH_MARGIN, or Coulomb's capped at k (friction.shear_limit)."""
-    law = problem.scene.friction
-    reaches = law.m > 1.0 - STRENGTH_MARGIN if law.law == "factor" else law.shear_limit
-    return problem.has_contact and problem.has_friction and reaches and problem.scene.rate_sensitive
-
-
 def strength_share(problem: FlowProblem) -> float:
     """int |tau . w| over the arc where |tau| >= (1 - STRENGTH_MARGIN) k, k = sigma_p/sqrt(3) as the
     factor law reads it (at the rate floor in a rigid zone), over int |tau . w|: the share of the
@@ -150,7 +138,7 @@ def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) ->
         "unpressed_friction_torque": integrate(problem, ufl.dot(
             problem.friction_traction(), problem.tool_velocity) * unpressed(problem)
             * problem.ds_contact) * R / v_R}
-    at_strength = {} if not bound_reaches_strength(problem) else {
+    at_strength = {} if not problem.bound_reaches_strength else {
         "friction_at_strength_share": strength_share(problem)}
     return {"roll_torque": balance["roll_power"] * R / v_R, **unpressed_torque, **at_strength,
             "roll_power": balance["roll_power"],

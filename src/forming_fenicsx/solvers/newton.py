@@ -122,6 +122,9 @@ class NewtonSolver(SecantSolver):
         self._steps: list[tuple[bool, bool]] = []
         # the increments' largest ratio (_rate_settled), and whether they have met delta
         self._rate, self._met = math.nan, False
+        # the rate rule holds where the step carries a bound that can reach a rate-sensitive
+        # metal's shear strength, whose near-free split the steps creep along (_rate_settled)
+        self._rate_rule = self.friction_tangent is not None and problem.bound_reaches_strength
 
     def destroy(self) -> None:
         self.newton.destroy()
@@ -313,17 +316,18 @@ class NewtonSolver(SecantSolver):
 
     def _rate_settled(self, increments: list[float]) -> bool:
         """Whether the last steps put the answer within delta, in rolling with the friction
-        bound's derivative in the step. Near sticking its J is nearly singular: GMRES stops short
-        and the frozen steps (A^-1 F) creep along the near-null mode, the stick zone's slip, or
-        the line search cuts Newton's step. A steel strip rolled 2 -> 1.4 mm at m = 1 met delta =
-        1e-4 on a frozen step with its roll force 1.1 % low, its frozen steps then creeping by
-        1.8e-5 a step for a hundred steps; one rolled 5 -> 4 mm met it on a Newton step after two
-        cut ones, 0.7 % low (docs/rolling.md). So a run ends on a Newton step only after a step
-        taken in full, and on a frozen step once the last RATE_RUN, all frozen and full, fall and
-        bound the distance to the answer, sum_j>k ||du_j|| <= ||du_k|| rho / (1 - rho), rho their
-        largest ratio, below delta."""
+        bound's derivative in the step, where the bound can reach a rate-sensitive metal's shear
+        strength (FlowProblem.bound_reaches_strength). Near sticking its J is nearly singular:
+        GMRES stops short and the frozen steps (A^-1 F) creep along the near-null mode, the stick
+        zone's slip, or the line search cuts Newton's step. A steel strip rolled 2 -> 1.4 mm at
+        m = 1 met delta = 1e-4 on a frozen step with its roll force 1.1 % low, its frozen steps
+        then creeping by 1.8e-5 a step for a hundred steps; one rolled 5 -> 4 mm met it on a
+        Newton step after two cut ones, 0.7 % low (docs/rolling.md). So a run ends on a Newton
+        step only after a step taken in full, and on a frozen step once the last RATE_RUN, all
+        frozen and full, fall and bound the distance to the answer, sum_j>k ||du_j|| <= ||du_k||
+        rho / (1 - rho), rho their largest ratio, below delta."""
         self._rate = math.nan
-        if self.friction_tangent is None or increments[-1] < ROUNDING:
+        if not self._rate_rule or increments[-1] < ROUNDING:
             return True
         frozen, full = zip(*self._steps[-RATE_RUN:])
         if not frozen[-1]:
@@ -450,8 +454,7 @@ class NewtonSolver(SecantSolver):
             increment = self._newton_step(result, inner, start)
             increments.append(increment)
             # once met, delta ends the run only with the rate's consent (_rate_settled)
-            self._met = self._met or (self.friction_tangent is not None
-                                      and increment < settings.tolerance)
+            self._met = self._met or (self._rate_rule and increment < settings.tolerance)
             if self._must_stop(result, increments, 0, inner, friction_note):
                 return result
             # a step the line search cut does not end the run: its short full step says little
