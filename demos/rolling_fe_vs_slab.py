@@ -4,9 +4,9 @@
 #         [--point R/h1 REDUCTION MU ...] [--set SECTION.KEY=VALUE ...]
 #
 # For R/h1 from 10 to 200, reductions from 10 to 40 % and Coulomb mu from 0.05 to 0.3, and
-# sticking (the FE's friction factor m = 1 against the slab's tau = k): the roll force, torque per
-# roll, neutral angle and forward slip of the FE model (process.kind = "rolling", every numerical
-# setting its default) beside the von Karman slab solution for rigid rolls
+# sticking (the FE's friction.law = "sticking" against the slab's tau = k): the roll force, torque
+# per roll, neutral angle and forward slip of the FE model (process.kind = "rolling", every
+# numerical setting its default) beside the von Karman slab solution for rigid rolls
 # (forming_fenicsx.physics.rolling_slab), both dimensionless: exit thickness h1 = 1, the shear
 # flow stress k of the FE law at its reference strain rate (law (4.5) with alpha = 1e-3: nearly
 # rate independent; its rate1 = RATE1, below which the law is viscous, 1e-5 of the process strain
@@ -48,7 +48,7 @@ RATE1 = 1e-5
 def scene_of(ratio: float, reduction: float, friction, settings: dict | None = None):
     """The dimensionless rolling scene of one grid point (h1 = 1, roll speed 1), ``settings``
     ({section: {key: value}}) over it."""
-    law = ({"law": "factor", "m": 1.0} if friction == "sticking"
+    law = ({"law": "sticking"} if friction == "sticking"
            else {"law": "coulomb", "mu": friction})
     data = {"process": {"kind": "rolling", "velocity": 1.0},
             "geometry": {"entry_thickness": 1.0 / (1.0 - reduction), "exit_thickness": 1.0,
@@ -157,7 +157,7 @@ def plot(rows: list[dict], path: Path) -> Path:
                       (r[f"fe_{key}"] - r.get(f"slab_{key}", math.nan))
                       * (100 if key == "forward_slip" else 1) for r in chosen]
             ax.plot([r["h_mean/L"] for r in chosen], values, markers[friction],
-                    label=f"mu = {friction}" if friction != "sticking" else "sticking (FE m = 1)",
+                    label=f"mu = {friction}" if friction != "sticking" else "sticking",
                     alpha=0.8)
         ax.axhline(0.0, color="k", linewidth=0.6)
         ax.set_xscale("log")

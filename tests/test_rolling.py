@@ -12,6 +12,7 @@ import runpy
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -268,6 +269,24 @@ def test_hot_rolling_cools_the_strip_at_the_rolls():
     assert 0 < summary["neutral_angle"] < summary["bite_angle"]
 
 
+def test_sticking_rolls_hot_with_the_heat_of_its_small_slip():
+    """demos/hot_strip_rolling.toml with friction.law = "sticking" on a 2 mm mesh: the strip held to
+    the rolls slips at about d_T, so the friction's power, c_T |slip|^2, is 0.6 % of the rolls'
+    (Coulomb's mu = 0.3: 15 %), and the heat the thermal field takes from it, shared between strip
+    and roll, is that power (the default mesh: 1564.9 N mm/s per mm, 13 solves)."""
+    scene = load_scene(DEMOS / "hot_strip_rolling.toml", [
+        "friction.law=sticking", "friction.mu=0", "discretisation.mesh_size=2",
+        "output.fields=false", "output.figures=false"])
+    summary = solve_scene(scene)[2]
+    powers, heat = summary["power_balance"], summary["energy_balance"]
+    assert summary["converged"] and summary["linear_solves"] <= 20
+    assert 1e-3 < powers["friction_power"] / powers["roll_power"] < 0.01
+    assert heat["friction_to_workpiece"] + heat["friction_to_die"] == pytest.approx(
+        powers["friction_power"], rel=1e-3)
+    assert abs(powers["residual"]) < 1e-3 and abs(heat["residual"]) < 1e-3
+    assert 0 < summary["neutral_angle"] < summary["bite_angle"]
+
+
 def test_a_hot_pass_with_tensions_ends_once_newton_meets_delta():
     """A new user's hot finishing pass (stop 65): AA6063 6 -> 4 mm at 480 C, rolls of 150 mm at
     120 rpm and 60 C, mu = 0.35, front tension 10 and back 5 MPa, 1.2 m wide, mm and MPa. Its
@@ -414,25 +433,70 @@ def test_coulomb_friction_is_capped_at_the_shear_flow_stress():
 
 
 def test_sticking_rolls_as_sims_published_theory_says():
-    """Sticking friction (the friction factor m = 1) on a long thin gap (R/h1 = 200, 30 %,
-    h_m/L = 0.13, dimensionless, rate1 as the grid's): the roll force 0.8 % below Sims' (1954,
-    Orowan's theory with sticking: P = 2k sqrt(R dh) Q_p), the neutral angle's share of the bite
-    0.438 against his 0.439, and 8 % below the homogeneous slab solution, whose yield condition
-    leaves the shear out (docs/rolling.md, "A published theory")."""
-    scene = _dimensionless(200.0, 0.3, {"law": "factor", "m": 1.0})
-    problem, _, summary = solve_scene(scene)
-    # the grid's nearly rate-independent law (alpha = 1e-3): the bound stays frozen in the step
+    """Sticking (friction.law = "sticking", the strip held to the rolls) on a long thin gap (R/h1 =
+    200, 30 %, h_m/L = 0.13, dimensionless, rate1 as the grid's): the roll force 0.15 % below
+    Sims' (1954, Orowan's theory with sticking: P = 2k sqrt(R dh) Q_p), the neutral angle's share
+    of the bite 0.438 against his 0.439, and 8 % below the homogeneous slab solution, whose yield
+    condition leaves the shear out (docs/rolling.md, "A published theory"). The slip is
+    d_T |tau|/k0: d_T where the friction holds k, 3 d_T at the bite's corner. The friction factor
+    at m = 1 lets the arc slip at k: 0.7 % below (on this law, which does not harden, its limit
+    d_T -> 0 and h -> 0 is sticking's; docs/rolling.md#sticking)."""
+    found = {}
+    for name, law in (("sticking", {"law": "sticking"}), ("factor", {"law": "factor", "m": 1.0})):
+        scene = _dimensionless(200.0, 0.3, law)
+        problem, _, summary = solve_scene(scene)
+        found[name] = summary, die_profile(problem)
+        assert summary["converged"] and summary["linear_solves"] <= 20
+    (summary, arc), (factor, _) = found["sticking"], found["factor"]
+    # the grid's nearly rate-independent law (alpha = 1e-3): the factor law's bound stays frozen
     assert not problem.factor_bound_moves
     g, k = scene.geometry, scene.reference_flow_stress / math.sqrt(3.0)
     sims = sims_sticking(g.roll_radius, g.entry_thickness, g.exit_thickness)
     draft = g.entry_thickness - g.exit_thickness
-    assert summary["converged"]
     assert summary["roll_force"] == pytest.approx(
-        2 * k * math.sqrt(g.roll_radius * draft) * sims.force_factor, rel=0.02)
+        2 * k * math.sqrt(g.roll_radius * draft) * sims.force_factor, rel=5e-3)
     assert summary["neutral_angle"] / summary["bite_angle"] == pytest.approx(
         sims.neutral_angle / g.bite_angle, abs=0.01)
     slab = slab_rolling(g.roll_radius, g.entry_thickness, g.exit_thickness, k, friction="sticking")
     assert summary["roll_force"] < 0.93 * slab.roll_force
+    assert summary["roll_force"] / factor["roll_force"] - 1 == pytest.approx(7e-3, abs=2e-3)
+    assert abs(summary["power_balance"]["residual"]) < 1e-3
+    assert "friction_at_strength_share" not in summary
+    if arc is not None:  # the strip held: its slip d_T |tau|/k0, about d_T where |tau| = k
+        slip = abs(arc["slip"]) / scene.friction.d_T
+        assert 0.9 < np.median(slip) < 1.1 and max(slip) < 4.0  # 3.0 at the bite's corner
+
+
+def test_sticking_holds_a_rate_sensitive_steel_at_the_factor_laws_limit():
+    """Stop 66's steel (150 MPa rate^0.15) rolled 8 -> 5 mm at R = 200 mm and 1.5 m/s, mm and MPa.
+    The friction factor at m = 1 leaves the split of the slip between the interface and the metal
+    under it to d_T: 13956.3, 14096.3, 14185.4 and 14244.6 N/mm at d_T = 2e-3 to 2.5e-4 U, in 76
+    solves and more, heading for about 14370 (docs/rolling.md). Sticking holds the strip to the
+    rolls: 14422.9 N/mm in 10 linear solves, 14430 at d_T halved, and no friction_at_strength
+    warning; its penalised slip, like m k, does not vanish with the pressure near the exit (15 %
+    of the torque, the warning the factor law at m = 1 gives too)."""
+    found = {}
+    for d_T in (1e-3, 5e-4):
+        scene = scene_from_dict({
+            "process": {"kind": "rolling", "velocity": 1500.0},
+            "geometry": {"entry_thickness": 8.0, "exit_thickness": 5.0, "roll_radius": 200.0},
+            "material": {"law": "rate_power", "A": 150.0, "n": 0.15},
+            "friction": {"law": "sticking", "d_T_relative": d_T},
+            "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
+            "output": {"fields": False, "figures": False}})
+        problem, _, found[d_T] = solve_scene(scene, quiet=True)
+        assert not (problem.bound_reaches_strength or problem.factor_bound_moves)
+        assert problem.friction_state is None  # no bound to freeze
+    summary = found[1e-3]
+    assert summary["converged"] and summary["linear_solves"] <= 12
+    assert summary["roll_force"] == pytest.approx(14422.9, rel=3e-4)
+    assert summary["roll_torque"] == pytest.approx(175442.6, rel=3e-4)
+    assert abs(found[5e-4]["roll_force"] / summary["roll_force"] - 1) < 1e-3
+    assert abs(summary["power_balance"]["residual"]) < 1e-3
+    assert 0 < summary["neutral_angle"] < summary["bite_angle"]
+    assert "friction_at_strength_share" not in summary
+    assert [w for w in summary["warnings"] if "sticking friction acts" in w]
+    assert not [w for w in summary["warnings"] if "shear strength" in w]
 
 
 def test_a_textbook_plate_takes_the_power_the_book_gives():

@@ -1,5 +1,6 @@
 """The physical sanity checks (sanity.py) on summaries of a normal run with one number changed: each
 check is silent below its thresholds, warns between them and fails above, naming cause and fix."""
+import dataclasses
 import math
 
 import pytest
@@ -206,8 +207,15 @@ def test_the_friction_factor_on_an_unpressed_roll_warns():
     found = {f.check: f for f in check_run({**rolled, "unpressed_friction_torque": -6.49e6},
                                            scene)}
     assert "about 8 % of the roll torque" in found["unpressed_friction"].message
+    assert "the factor law, unlike" in found["unpressed_friction"].message
     assert "unpressed_friction" not in {
         f.check for f in check_run({**rolled, "unpressed_friction_torque": -5e5}, scene)}
+    # sticking's penalised slip does not vanish with the pressure either (15 % on stop 70's steel
+    # pass 8 -> 5 mm), and the message names it
+    scene.friction = dataclasses.replace(scene.friction, law="sticking", m=0.0)
+    message = {f.check: f for f in check_run({**rolled, "unpressed_friction_torque": -6.49e6},
+                                             scene)}["unpressed_friction"].message
+    assert message.startswith("sticking friction acts") and "and sticking, unlike" in message
 
 
 def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
@@ -227,6 +235,8 @@ def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
                                                scene)}
         message = found["friction_at_strength"].message
         assert "over 83 % of the friction's torque" in message and fix in message
+        # the factor law's limit d_T -> 0 at m = 1 is sticking's (docs/rolling.md)
+        assert ('friction.law = "sticking"' in message) is (law.get("law") == "factor")
         assert "friction_at_strength" not in {f.check for f in check_run(
             {**rolled, "friction_at_strength_share": 0.09}, scene)}
 

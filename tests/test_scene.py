@@ -80,6 +80,12 @@ BAD = [
      "geometry.length"),
     ({"friction": {"mu": -0.1}}, "friction.mu", ">= 0"),
     ({"friction": {"m": 0.5}}, "friction.m", 'set friction.law = "factor"'),
+    ({"friction": {"law": "sticking", "mu": 0.3}}, "friction.mu", "it has no coefficient"),
+    ({"friction": {"law": "factor", "m": 1.0, "mu": 0.3}}, "friction.mu", "m is its coefficient"),
+    # sticking is rolling's: extrusion's ram face meets the container wall (Example 1 with it:
+    # a ram pressure of 6955 k)
+    ({"friction": {"law": "sticking"}}, "friction.law", "rolling's only"),
+    ({"friction": {"law": "slip"}}, "friction.law", "coulomb, factor, sticking"),
     ({"friction": {"d_T": 0.0}}, "friction.d_T", "> 0"),
     ({"penalty": {"d": 0.0}}, "penalty.d", "> 0"),
     ({"penalty": {"d_N": -1e-6}}, "penalty.d_N", "> 0"),

@@ -168,6 +168,14 @@ class Scene:
             raise SceneError("thermal.container_h", "a mesh file's Gamma3 is one boundary: the "
                              "container takes the die's values (leave container_* out)")
         self._check_free_surface()
+        if self.friction.law == "sticking" and self.process.kind != "rolling":
+            raise SceneError("friction.law", '"sticking" holds the strip to the rolls, and is '
+                             "rolling's only: in drawing and extrusion the velocity prescribed "
+                             "where the die's surface begins (the ram's face at the container "
+                             "wall) slips against it, and the penalised slip's stress, k0/d_T "
+                             "times that slip, has no bound there (Example 1 with it: a ram "
+                             'pressure of 6955 k). friction.law = "factor" with m = 1 bounds the '
+                             "friction at the shear flow stress k")
         if self.process.kind == "rolling" and self.friction.coefficient <= 0:
             key = "friction.m" if self.friction.law == "factor" else "friction.mu"
             raise SceneError(key, "must be > 0 for rolling: the rolls draw the strip in by "

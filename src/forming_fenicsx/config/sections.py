@@ -91,14 +91,17 @@ class Scales:
     flow_stress: float
 
 
-FRICTION_LAWS = ("coulomb", "factor")
+FRICTION_LAWS = ("coulomb", "factor", "sticking")
 
 
 @dataclass
 class Friction:
     """Friction on Gamma3, regularised by d_T (3.11): absolute, or ``d_T_relative`` times the
     process velocity (default D_T_RELATIVE). ``law``: "coulomb" (2.9), tau_f = mu * sigma_N-bar, or
-    "factor", tau_f = m k with k = sigma_p/sqrt(3) the workpiece's shear flow stress (0 <= m <= 1).
+    "factor", tau_f = m k with k = sigma_p/sqrt(3) the workpiece's shear flow stress (0 <= m <= 1),
+    or "sticking", the workpiece held to the die (roll), its slip penalised, tau = -(k0/d_T) u_T
+    with k0 the shear flow stress at the reference rate: the metal under the surface, not the
+    interface, bounds the friction stress (friction.py).
 
     Coulomb's bound uses the averaged (mollified) normal stress over ``mollification_length``
     (default: the mesh size), or the local penalty stress of (3.4). ``shear_limit`` caps it at the
@@ -118,8 +121,9 @@ class Friction:
 
     @property
     def coefficient(self) -> float:
-        """The law's coefficient: m of the factor law, mu of Coulomb's (0: no friction)."""
-        return self.m if self.law == "factor" else self.mu
+        """The law's coefficient: m of the factor law, mu of Coulomb's (0: no friction), 1 for
+        sticking (the friction reaches the metal's shear strength)."""
+        return {"factor": self.m, "coulomb": self.mu, "sticking": 1.0}[self.law]
 
     def resolve(self, scales: Scales, d_T_relative: float = D_T_RELATIVE) -> None:
         set_pair("friction", self, "d_T", scales.velocity, d_T_relative)
@@ -133,12 +137,17 @@ class Friction:
         if not 0 <= self.m <= 1:
             raise SceneError("friction.m",
                              f"must lie in [0, 1] (the friction factor); got {self.m}")
-        unused = {"coulomb": ("m", self.m), "factor": ("mu", self.mu)}[self.law]
-        if unused[1] != 0:
-            coefficient, other = ("mu", "factor") if self.law == "coulomb" else ("m", "coulomb")
-            raise SceneError(f"friction.{unused[0]}", f'does not apply to friction.law = '
-                             f'"{self.law}" ({coefficient} is its coefficient): leave it out, or '
-                             f'set friction.law = "{other}", whose coefficient it is')
+        unused = {"coulomb": [("m", self.m)], "factor": [("mu", self.mu)],
+                  "sticking": [("mu", self.mu), ("m", self.m)]}[self.law]
+        for key, value in unused:
+            if value == 0:
+                continue
+            other = "factor" if key == "m" else "coulomb"
+            own = {"coulomb": "mu is its coefficient", "factor": "m is its coefficient",
+                   "sticking": "it has no coefficient"}[self.law]
+            raise SceneError(f"friction.{key}", f'does not apply to friction.law = '
+                             f'"{self.law}" ({own}): leave it out, or set friction.law = '
+                             f'"{other}", whose coefficient it is')
         check_positive("friction.d_T", self.d_T)
         if self.normal_stress not in NORMAL_STRESSES:
             raise SceneError("friction.normal_stress",

@@ -12,7 +12,7 @@ from mpi4py import MPI
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.coupled.thermal import (FieldExpression, FrictionHeat, HeatExchange,
                                              TemperatureField, ThermalMaterial)
-from forming_fenicsx.physics.friction import slip_coefficient, tangential
+from forming_fenicsx.physics.friction import tangential
 
 CONTAINER = max(ROLES.values()) + 1  # the facet tag of the container wall, split from gamma3
 
@@ -42,9 +42,10 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     friction heat on the contact when the flow has friction, Q_k of the flow's degree.
     ``plastic_power`` defaults to the flow law's sigma(rate(v)) rate(v) (the isothermal law: a
     temperature-dependent law passes its own), ``friction_power`` to the regularised friction's
-    power at v itself, tau_f |v_T|^2 / sqrt(|v_T|^2 + d_T^2) (friction.py; not with the flow's
-    slip coefficient, which Newton's steps do not update: docs/thermal.md). ``temperature``: the
-    flow's own T Function when its law reads it (the field then solves into it)."""
+    power at v itself, tau_f |v_T|^2 / sqrt(|v_T|^2 + d_T^2) or sticking's c_T |v_T|^2
+    (friction.py; not with the flow's slip coefficient, which Newton's steps do not update:
+    docs/thermal.md). ``temperature``: the flow's own T Function when its law reads it (the field
+    then solves into it)."""
     thermal, problem_roles = problem.scene.thermal, problem.roles
     tags = container_tags(problem)
     contact = [ROLES["gamma3_contact"]] if "gamma3_contact" in problem_roles else []
@@ -63,9 +64,7 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     def slip_power(v, T):  # tau_f |s|^2 / sqrt(|s|^2 + d_T^2): the regularised law's at v itself
         slip = problem.slip(v)
         tangent = tangential(slip, problem.n)
-        coefficient = slip_coefficient(problem.friction_bound(), slip, problem.n,
-                                       problem.scene.friction.d_T)
-        return coefficient * ufl.dot(tangent, tangent)
+        return problem.friction_coefficient(v) * ufl.dot(tangent, tangent)
     friction = None
     if problem.has_friction:
         friction = FrictionHeat(friction_power or slip_power, tuple(contact + container),

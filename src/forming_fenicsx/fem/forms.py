@@ -125,6 +125,8 @@ class FlowProblem:
         self.has_contact = "gamma3_contact" in self.roles
         law = scene.friction
         self.has_friction = self.has_contact and law.coefficient > 0
+        # sticking: the slip penalised at a fixed stiffness, no bound to freeze (friction.py)
+        self.sticking = self.has_friction and law.law == "sticking"
         self.rolling = scene.process.kind == "rolling"
         process = scene.process
         self.has_force = ("gamma5_force" in self.roles and process.applied_force is not None) or (
@@ -154,14 +156,14 @@ class FlowProblem:
         # rolling's bound that can reach a rate-sensitive metal's shear strength k (the factor law
         # at m > 0.99, Coulomb's capped at k): there the slip regularisation d_T splits the slip
         # between the interface and the metal under it, nearly freely (docs/rolling.md)
-        reaches = law.m > 1.0 - friction.STRENGTH_MARGIN if law.law == "factor" \
-            else law.shear_limit
+        reaches = {"factor": law.m > 1.0 - friction.STRENGTH_MARGIN,
+                   "coulomb": law.shear_limit, "sticking": False}[law.law]
         self.bound_reaches_strength = bool(
             self.rolling and self.has_contact and self.has_friction and reaches
             and scene.rate_sensitive)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
-        if self.has_friction:
+        if self.has_friction and not self.sticking:
             self.friction_state = FrozenVelocity("friction bound", self.V)
             self.frozen.append(self.friction_state)
             if law.law == "coulomb" and law.normal_stress == "averaged":
@@ -319,10 +321,15 @@ class FlowProblem:
             return friction.shear_limited(bound, self.flow_stress(state))
         return bound
 
-    def friction_coefficient(self):
-        """Slip coefficient tau_f/sqrt(|u_state,T|^2 + d_T^2) of the regularised friction."""
-        return friction.slip_coefficient(self.friction_bound(), self.slip(self.u_state), self.n,
-                                         self.scene.friction.d_T)
+    def friction_coefficient(self, velocity=None):
+        """Slip coefficient tau_f/sqrt(|w_T|^2 + d_T^2) of the regularised friction at the slip w of
+        ``velocity`` (default the secant state u_state); sticking's constant k0/d_T."""
+        law = self.scene.friction
+        if self.sticking:
+            return dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(friction.sticking_coefficient(
+                self.scene.scales.flow_stress, law.d_T)))
+        state = self.u_state if velocity is None else velocity
+        return friction.slip_coefficient(self.friction_bound(), self.slip(state), self.n, law.d_T)
 
     def slip(self, u):
         """u - w: the velocity relative to the die's surface (u itself for a fixed die)."""

@@ -65,8 +65,8 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
     friction.SLOW_SLIP times the process velocity, and with its secant tau_f/sqrt(|u_T|^2 + d_T^2),
     the linearisation of the direct method (3.13), where it slips slower or sticks: there the
     tangent's curvature, about tau_f/d_T near zero slip, made the line search cut the steps
-    (docs/solvers.md). The rate is regularised as sqrt(rate^2 + (1e-6 rate1)^2) so that everything
-    stays finite in rigid zones.
+    (docs/solvers.md). Sticking's penalised slip is linear: its term is exact. The rate is
+    regularised as sqrt(rate^2 + (1e-6 rate1)^2) so that everything stays finite in rigid zones.
     """
     scene, material, w = problem.scene, problem.scene.material, problem.solution
     c = problem.coordinates
@@ -127,7 +127,12 @@ def newton_forms(problem: FlowProblem) -> NewtonForms:
         active = ufl.max_value(problem.contact_active(u), problem.contact_active(u_previous))
         operator += contact.contact_form(du, v, active, problem.n, scene.penalty.d_N,
                                          problem.ds_contact)
-    if problem.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
+    if problem.sticking:  # the slip penalised: linear, its secant the tangent
+        stiffness = problem.friction_coefficient()
+        others.append(friction.sticking_functional(stiffness, problem.slip(u), problem.n)
+                      * problem.ds_contact)
+        operator += friction.friction_form(du, v, stiffness, problem.n, problem.ds_contact)
+    elif problem.has_friction:  # secant in slow slip, tangent in fast slip (friction.newton_form)
         tau_f, d_T = problem.friction_bound(), scene.friction.d_T
         others.append(friction.regularised_functional(tau_f, problem.slip(u), problem.n, d_T)
                       * problem.ds_contact)

@@ -1,10 +1,12 @@
-"""Friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11): Coulomb's law of the paper, or
-the friction factor law (the "shear friction" of bulk-forming codes, Chen and Kobayashi).
+"""Friction on Gamma3, regularised by d_T as in Remark 3.2 / (3.11): Coulomb's law of the paper,
+the friction factor law (the "shear friction" of bulk-forming codes, Chen and Kobayashi), or
+sticking.
 
 The bound tau_f(w) is Coulomb's mu sigma_N-bar (2.9), or m k with k = sigma_p(rate)/sqrt(3) the
 shear flow stress of the workpiece where it slides. j_dT(w, v) = int tau_f(w) sqrt(|v_T|^2 + d_T^2),
 with Gateaux derivative tau_f(w) v_T / sqrt(|v_T|^2 + d_T^2); the secant-modulus methods linearise
-it with the slip coefficient tau_f / sqrt(|u_n,T|^2 + d_T^2) of the current state.
+it with the slip coefficient tau_f / sqrt(|u_n,T|^2 + d_T^2) of the current state. Sticking has no
+bound: j(v) = int k0/(2 d_T) |v_T|^2 penalises the slip (sticking_coefficient), linear in v.
 """
 from __future__ import annotations
 
@@ -36,6 +38,23 @@ def factor_bound(m: float, flow_stress):
 RATE_SENSITIVE = 0.01
 # a friction stress within this fraction of k is "at the metal's shear strength" (post/rolls.py)
 STRENGTH_MARGIN = 0.01
+
+
+def sticking_coefficient(flow_stress: float, d_T: float) -> float:
+    """c_T = k0 / d_T, k0 = sigma_0/sqrt(3) the shear flow stress at the reference rate: sticking's
+    slip penalty, tau = -c_T u_T, the factor law's stiffness at zero slip with m = 1 and no bound.
+    The metal under the surface bounds the friction stress at its shear strength k, so the slip
+    stays at d_T |tau| / k0. On a metal that does not harden it is the factor law's limit m = 1,
+    d_T -> 0, where the law's bound leaves the split of the slip between the interface and the
+    metal under it nearly free, which Newton's steps creep along; a hardening metal's held surface
+    layer hardens by its shear, and sticking lies above that limit (docs/rolling.md#sticking)."""
+    return flow_stress / 3.0**0.5 / d_T
+
+
+def sticking_functional(coefficient, u, n):
+    """Integrand of sticking's j(u) = int c_T/2 |u_T|^2, whose derivative is friction_form."""
+    slip = tangential(u, n)
+    return 0.5 * coefficient * ufl.dot(slip, slip)
 
 
 def shear_limited(bound, flow_stress):

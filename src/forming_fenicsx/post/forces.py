@@ -58,9 +58,9 @@ def unpressed_friction_x(problem: FlowProblem) -> float:
 
 def factor_friction(problem: FlowProblem) -> bool:
     """Whether the die (or roll) has the friction factor's law, whose m k does not vanish with the
-    contact pressure."""
+    contact pressure, or sticking, whose penalised slip does not either."""
     return problem.has_contact and problem.has_friction \
-        and problem.scene.friction.law == "factor"
+        and problem.scene.friction.law in ("factor", "sticking")
 
 
 def unpressed(problem: FlowProblem) -> ufl.core.expr.Expr:

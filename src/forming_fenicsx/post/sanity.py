@@ -295,12 +295,12 @@ def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
 
 
 def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
-    """The friction factor's m k on the die where the workpiece does not press on it (a land or
-    bearing the product would leave): its x-force taken over the product's section, the back
-    pull it puts on the pass, against the answer (drawing: that force over the drawing force;
-    extrusion: over the ram force times A1/A0)."""
+    """The friction factor's m k (in rolling also sticking's penalised slip) on the die where the
+    workpiece does not press on it (a land or bearing the product would leave): its x-force taken
+    over the product's section, the back pull it puts on the pass, against the answer (drawing:
+    that force over the drawing force; extrusion: over the ram force times A1/A0)."""
     if scene.process.kind == "rolling":
-        return _unpressed_roll(summary)
+        return _unpressed_roll(summary, scene)
     force = summary.get("unpressed_friction_force_x", 0.0)
     if not force > 0:
         return None
@@ -325,20 +325,21 @@ def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:
                    "law, unlike Coulomb's mu p, does not vanish with the pressure" + hint)
 
 
-def _unpressed_roll(summary: dict[str, Any]) -> Finding | None:
-    """Rolling's: the friction factor's torque where the strip does not press on the roll (the
-    end of the arc it leaves at its exit thickness) against the roll torque."""
+def _unpressed_roll(summary: dict[str, Any], scene: Scene) -> Finding | None:
+    """Rolling's: the friction factor's (or sticking's) torque where the strip does not press on
+    the roll (the end of the arc it leaves at its exit thickness) against the roll torque."""
     torque, total = summary.get("unpressed_friction_torque", 0.0), summary["roll_torque"]
     share = abs(torque) / abs(total) if total else 0.0
     if not share > UNPRESSED_FRICTION:
         return None
+    acts, law = (("sticking friction", "sticking") if scene.friction.law == "sticking" else
+                 ("the friction factor's m k", "the factor law"))
     return Finding("unpressed_friction",
-                   "the friction factor's m k acts where the rolled strip does not press on the "
-                   "rolls (its contact pressure is zero there, near the exit): that friction's "
-                   f"torque is about {100 * share:.2g} % of the roll torque. The roll gap holds "
-                   "the strip on the rolls there, and the factor law, unlike Coulomb's mu p, does "
-                   "not vanish with the pressure: Coulomb friction (friction.law = \"coulomb\") "
-                   "gives none there")
+                   f"{acts} acts where the rolled strip does not press on the rolls (its contact "
+                   "pressure is zero there, near the exit): that friction's torque is about "
+                   f"{100 * share:.2g} % of the roll torque. The roll gap holds the strip on the "
+                   f"rolls there, and {law}, unlike Coulomb's mu p, does not vanish with the "
+                   "pressure: Coulomb friction (friction.law = \"coulomb\") gives none there")
 
 
 def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | None:
@@ -352,7 +353,9 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
     law = scene.friction
     half = f"friction.d_T_relative = {law.d_T_relative / 2:.3g} (half of this run's)"
     fix = (f"Rerun with {half} to see how far: the answer moves toward its d_T -> 0 limit, "
-           "which lay about 1.9 % above a steel pass's default at m = 1" if law.law == "factor" else
+           "which lay about 1.9 % above a steel pass's default at m = 1. friction.law = "
+           '"sticking" holds the strip to the rolls: that limit on a metal that does not '
+           "harden, in about 10 linear solves (docs/rolling.md)" if law.law == "factor" else
            "With friction.shear_limit = false (the default on a rate-sensitive metal) the metal "
            "under the surface bounds the friction at its own rate, and d_T moves the roll force "
            f"by 0.1 % or less; or rerun with {half} to see how far")
