@@ -47,6 +47,18 @@ def _dimensionless(radius: float, reduction: float, friction: dict,
         "material": law, "friction": friction, "output": {"fields": False, "figures": False}})
 
 
+def _steel_scene(h0: float, h1: float, radius: float, friction: dict, **sections):
+    """Stop 66's rate-sensitive steel (150 MPa rate^0.15) rolled h0 -> h1 between rolls of
+    ``radius`` at 1.5 m/s with ``friction``, mm and MPa, ``sections`` ({section: {key: value}})
+    added."""
+    return scene_from_dict({
+        "process": {"kind": "rolling", "velocity": 1500.0},
+        "geometry": {"entry_thickness": h0, "exit_thickness": h1, "roll_radius": radius},
+        "material": {"law": "rate_power", "A": 150.0, "n": 0.15}, "friction": friction,
+        "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
+        "output": {"fields": False, "figures": False}, **sections})
+
+
 @pytest.fixture(scope="module")
 def plain():
     """The demo strip without tensions: its summary."""
@@ -327,13 +339,7 @@ def test_a_sticking_pass_of_a_rate_sensitive_steel_converges_to_its_answer():
     answer (16014 against 16048.160 N/mm, which delta = 1e-8 gives: 19 solves now, 186 with the
     bound frozen). The step now carries the bound's derivative, k read at the rate floor in rigid
     zones, and takes the full step when it lowers ||F||: 16 solves."""
-    scene = scene_from_dict({
-        "process": {"kind": "rolling", "velocity": 1500.0},
-        "geometry": {"entry_thickness": 20.0, "exit_thickness": 14.0, "roll_radius": 300.0},
-        "material": {"law": "rate_power", "A": 150.0, "n": 0.15},
-        "friction": {"law": "factor", "m": 1.0},
-        "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
-        "output": {"fields": False, "figures": False}})
+    scene = _steel_scene(20.0, 14.0, 300.0, {"law": "factor", "m": 1.0})
     problem, _, summary = solve_scene(scene, quiet=True)
     assert problem.factor_bound_moves
     assert summary["converged"] and summary["linear_solves"] <= 20
@@ -361,13 +367,8 @@ def test_coulombs_bound_on_a_rate_sensitive_steel_is_not_capped_at_k():
             friction = {"mu": 0.3, "d_T_relative": d_T}
             if cap is not None:
                 friction["shear_limit"] = cap
-            scene = scene_from_dict({
-                "process": {"kind": "rolling", "velocity": 1500.0},
-                "geometry": {"entry_thickness": 2.0, "exit_thickness": 1.4, "roll_radius": 400.0},
-                "material": {"law": "rate_power", "A": 150.0, "n": 0.15}, "friction": friction,
-                "discretisation": {"mesh_size_relative": 0.25},
-                "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
-                "output": {"fields": False, "figures": False}})
+            scene = _steel_scene(2.0, 1.4, 400.0, friction,
+                                 discretisation={"mesh_size_relative": 0.25})
             assert scene.friction.shear_limit is bool(cap)
             problem, _, found[cap, d_T] = solve_scene(scene, quiet=True)
             # the rate rule of Newton's ending (newton.py) holds only where the bound reaches k
@@ -477,13 +478,7 @@ def test_sticking_holds_a_rate_sensitive_steel_at_the_factor_laws_limit():
     of the torque, the warning the factor law at m = 1 gives too)."""
     found = {}
     for d_T in (1e-3, 5e-4):
-        scene = scene_from_dict({
-            "process": {"kind": "rolling", "velocity": 1500.0},
-            "geometry": {"entry_thickness": 8.0, "exit_thickness": 5.0, "roll_radius": 200.0},
-            "material": {"law": "rate_power", "A": 150.0, "n": 0.15},
-            "friction": {"law": "sticking", "d_T_relative": d_T},
-            "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
-            "output": {"fields": False, "figures": False}})
+        scene = _steel_scene(8.0, 5.0, 200.0, {"law": "sticking", "d_T_relative": d_T})
         problem, _, found[d_T] = solve_scene(scene, quiet=True)
         assert not (problem.bound_reaches_strength or problem.factor_bound_moves)
         assert problem.friction_state is None  # no bound to freeze
@@ -518,15 +513,8 @@ def test_a_textbook_plate_takes_the_power_the_book_gives():
 
 
 def _steel_pass(h0: float, h1: float, radius: float, **solver) -> dict:
-    """Stop 66's rate-sensitive steel (150 MPa rate^0.15) rolled at 1.5 m/s, m = 1, mm and MPa:
-    the summary."""
-    scene = scene_from_dict({
-        "process": {"kind": "rolling", "velocity": 1500.0},
-        "geometry": {"entry_thickness": h0, "exit_thickness": h1, "roll_radius": radius},
-        "material": {"law": "rate_power", "A": 150.0, "n": 0.15},
-        "friction": {"law": "factor", "m": 1.0}, "solver": solver,
-        "units": {"length": "mm", "time": "s", "stress": "MPa", "force": "N"},
-        "output": {"fields": False, "figures": False}})
+    """Stop 66's rate-sensitive steel rolled at m = 1 (_steel_scene): the summary."""
+    scene = _steel_scene(h0, h1, radius, {"law": "factor", "m": 1.0}, solver=solver)
     return solve_scene(scene, quiet=True)[2]
 
 

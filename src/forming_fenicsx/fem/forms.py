@@ -127,6 +127,9 @@ class FlowProblem:
         self.has_friction = self.has_contact and law.coefficient > 0
         # sticking: the slip penalised at a fixed stiffness, no bound to freeze (friction.py)
         self.sticking = self.has_friction and law.law == "sticking"
+        self._sticking_stiffness = dolfinx.fem.Constant(mesh, PETSc.ScalarType(
+            friction.sticking_coefficient(scene.scales.flow_stress, law.d_T))) \
+            if self.sticking else None
         self.rolling = scene.process.kind == "rolling"
         process = scene.process
         self.has_force = ("gamma5_force" in self.roles and process.applied_force is not None) or (
@@ -159,8 +162,7 @@ class FlowProblem:
         reaches = {"factor": law.m > 1.0 - friction.STRENGTH_MARGIN,
                    "coulomb": law.shear_limit, "sticking": False}[law.law]
         self.bound_reaches_strength = bool(
-            self.rolling and self.has_contact and self.has_friction and reaches
-            and scene.rate_sensitive)
+            self.rolling and self.has_friction and reaches and scene.rate_sensitive)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction and not self.sticking:
@@ -324,12 +326,11 @@ class FlowProblem:
     def friction_coefficient(self, velocity=None):
         """Slip coefficient tau_f/sqrt(|w_T|^2 + d_T^2) of the regularised friction at the slip w of
         ``velocity`` (default the secant state u_state); sticking's constant k0/d_T."""
-        law = self.scene.friction
         if self.sticking:
-            return dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(friction.sticking_coefficient(
-                self.scene.scales.flow_stress, law.d_T)))
+            return self._sticking_stiffness
         state = self.u_state if velocity is None else velocity
-        return friction.slip_coefficient(self.friction_bound(), self.slip(state), self.n, law.d_T)
+        return friction.slip_coefficient(self.friction_bound(), self.slip(state), self.n,
+                                         self.scene.friction.d_T)
 
     def slip(self, u):
         """u - w: the velocity relative to the die's surface (u itself for a fixed die)."""

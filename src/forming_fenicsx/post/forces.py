@@ -50,15 +50,15 @@ def unpressed_friction_x(problem: FlowProblem) -> float:
     (its contact pressure is zero): the fixed domain holds the workpiece on Gamma3 where it would
     leave it (a land or bearing), and the factor law, unlike Coulomb's mu p, does not vanish with
     the pressure. 0 for Coulomb friction and without friction."""
-    if not factor_friction(problem):
+    if not pressure_free_friction(problem):
         return 0.0
     return integrate(problem, -problem.friction_traction()[0] * unpressed(problem)
                      * problem.ds_contact)
 
 
-def factor_friction(problem: FlowProblem) -> bool:
-    """Whether the die (or roll) has the friction factor's law, whose m k does not vanish with the
-    contact pressure, or sticking, whose penalised slip does not either."""
+def pressure_free_friction(problem: FlowProblem) -> bool:
+    """Whether the die (or roll) has friction that does not vanish with the contact pressure: the
+    friction factor's m k, or sticking's penalised slip."""
     return problem.has_contact and problem.has_friction \
         and problem.scene.friction.law in ("factor", "sticking")
 

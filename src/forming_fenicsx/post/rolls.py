@@ -18,7 +18,7 @@ import ufl
 from forming_fenicsx.core.roles import ROLES
 from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.physics.friction import STRENGTH_MARGIN, tangential
-from forming_fenicsx.post.forces import factor_friction, unpressed
+from forming_fenicsx.post.forces import pressure_free_friction, unpressed
 from forming_fenicsx.post.integrals import integrate
 
 
@@ -134,7 +134,7 @@ def roll_scalars(problem: FlowProblem, profile: dict[str, np.ndarray] | None) ->
     angle = (math.degrees(math.asin(min(1.0, (x_gap - neutral) / R))) if math.isfinite(neutral)
              else math.nan)
     # the friction factor's share of the torque where the strip does not press on the roll
-    unpressed_torque = {} if not factor_friction(problem) else {
+    unpressed_torque = {} if not pressure_free_friction(problem) else {
         "unpressed_friction_torque": integrate(problem, ufl.dot(
             problem.friction_traction(), problem.tool_velocity) * unpressed(problem)
             * problem.ds_contact) * R / v_R}

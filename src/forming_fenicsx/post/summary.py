@@ -12,8 +12,9 @@ from forming_fenicsx.post.diagnostics import (die_penetration, discrete_divergen
                                               volume_change)
 from forming_fenicsx.post.die import (contact_end_x, contact_pressures, die_contact_fraction,
                                       die_profile, die_scalars, die_scalars_3d, die_scalars_of)
-from forming_fenicsx.post.forces import (die_separation_force, factor_friction, force_balance,
-                                         unpressed_friction_x, whole_product)
+from forming_fenicsx.post.forces import (die_separation_force, force_balance,
+                                         pressure_free_friction, unpressed_friction_x,
+                                         whole_product)
 from forming_fenicsx.post.heat import thermal_scalars
 from forming_fenicsx.post.integrals import integrate
 from forming_fenicsx.post.product import (hardening_scalars, mean_exit_strain, pass_shape,
@@ -86,7 +87,7 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         "die_friction_force_x": die_friction,
         # the factor law's m k where the die is not pressed (extrusion and drawing; sanity.py)
         **({"unpressed_friction_force_x": unpressed_friction_x(problem)}
-           if factor_friction(problem) and not problem.rolling else {}),
+           if pressure_free_friction(problem) and not problem.rolling else {}),
         "applied_force_x": external,
         "force_balance_residual": residual,
         "divergence_l2": divergence,
