@@ -542,3 +542,16 @@ def test_a_run_held_by_the_rate_of_its_creeping_steps_says_so_and_does_not_fall_
     assert "the increments met delta = 0.0001 but" in summary["reason"]
     assert "solver.max_iterations" in summary["reason"]
     assert "direct method" not in summary["reason"]
+    assert 'friction.law = "sticking"' in summary["reason"]  # the law at m = 1's limit
+
+
+def test_a_step_cut_through_a_near_singular_tangent_gives_way_to_the_frozen_step():
+    """3 -> 2.2 mm, R = 150 mm (stop 71, a new user's pass): with the friction bound's derivative
+    J is near singular, Newton's steps were cut to 2^-12 from the 12th on, and the run stopped
+    unconverged after 242 solves (the direct method 3e-3 out of balance). A step cut below 1/8
+    now gives way to the frozen step: 109 solves, the answer the thresholds 2^-12 and 1/2 gave
+    too."""
+    summary = _steel_pass(3.0, 2.2, 150.0)
+    assert summary["converged"] and summary["force_balance_residual"] < 1e-4
+    assert summary["roll_force"] == pytest.approx(7182.8, rel=5e-4)
+    assert abs(summary["power_balance"]["residual"]) < 1e-3

@@ -80,6 +80,10 @@ class TangentGMRES:
             self._start.copy(du)
         return converged
 
+    def restore_start(self, du: PETSc.Vec) -> None:
+        """du <- the last solve's start, A^-1 F (the frozen step)."""
+        self._start.copy(du)
+
     def destroy(self) -> None:
         for item in (self._ksp, self._shell, self._start):
             item.destroy()

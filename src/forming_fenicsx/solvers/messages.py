@@ -163,6 +163,18 @@ def hardening_hint(scene: Scene) -> str:
             "a hardening curve of finite initial slope (voce; swift with a prestrain)")
 
 
+def strength_friction_hint(factor_at_strength: bool) -> str:
+    """What a rolling run adds when it does not converge with the factor law at the shear strength
+    of a rate-sensitive metal (FlowProblem.bound_reaches_strength)."""
+    if not factor_at_strength:
+        return ""
+    return ("; the friction factor m = 1 puts the interface at the rate-sensitive metal's own "
+            "shear strength: the slip splits between the two nearly freely, Newton's step along "
+            "that split is nearly singular, and the roll force rises steeply as m nears 1 "
+            "(docs/rolling.md#sticking). friction.law = \"sticking\", the law's d_T -> 0 limit, "
+            "or m = 0.95 converge in about 10 to 20 solves")
+
+
 def newton_trigger(records: list[IterationRecord]) -> str:
     """What the Newton steps measured as they failed, for the message: the increment's rise from
     its least value, and the most Gauss points that switched the flow law's branch and die nodes

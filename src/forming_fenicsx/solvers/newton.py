@@ -60,6 +60,8 @@ ENERGY_ROUNDING = 1e-13
 COUPLED_BALANCE = 1e-3
 # the increments that estimate the rate of convergence in rolling (_rate_settled)
 RATE_RUN = 3
+# a step through the friction bound's derivative cut below this gives way to the frozen step
+FROZEN_STEP_BELOW = 0.125
 # Newton's stops after which the direct method goes on (not a stop request, nor ill-conditioned
 # systems, which the direct method's would share)
 FALL_BACK_ON = ("non_finite", "diverging", "stalled", "max_iterations")
@@ -234,6 +236,17 @@ class NewtonSolver(SecantSolver):
         self.keep_previous()
         petsc_vec(problem.u).copy(petsc_vec(self._velocity))
         step = self._line_search(energy0, slope)
+        if self._friction_in_tangent and not frozen and step < FROZEN_STEP_BELOW:
+            # Phi hardly falls along J^-1 F: at the factor law's m = 1 on a rate-sensitive metal
+            # J is near singular and its step runs along the stick zone's slip (steel strips
+            # rolled 3 -> 2.2 and 15 -> 10 mm stopped unconverged after 242 and 218 solves; with
+            # the frozen step instead they converged in 109 and 93, docs/rolling.md)
+            self.tangent.restore_start(du)
+            forms.step.x.scatter_forward()
+            frozen = True
+            coupled += f" (cut to {step:.3g}: the frozen step instead)"
+            slope = self.newton.b.dot(du)
+            step = self._line_search(energy0, slope)
         # (4.4): the full step, or the longer one taken
         increment = self._relative_change() / min(step, 1.0)
         if not math.isfinite(increment):
@@ -368,6 +381,11 @@ class NewtonSolver(SecantSolver):
             return scene_tolerance
         return COUPLED_BALANCE
 
+    def _factor_at_strength(self) -> bool:
+        """Whether the friction is rolling's factor law at a rate-sensitive metal's strength."""
+        return self.problem.bound_reaches_strength \
+            and self.problem.scene.friction.law == "factor"
+
     def _corrections(self) -> list:
         """The frozen coefficients' derivatives the step carries (tangent_gmres.py)."""
         active = [self.coupled_tangent] if self._coupled_in_tangent() else []
@@ -472,12 +490,14 @@ class NewtonSolver(SecantSolver):
                 return result
         if self._met and not self._rate_settled(increments):
             result.reason = messages.slow_convergence(settings.max_iterations, increments,
-                                                      self._rate, settings.tolerance)
+                                                      self._rate, settings.tolerance) \
+                + messages.strength_friction_hint(self._factor_at_strength())
             result.cause = "slow"  # no fallback: the direct method creeps too
             return result
         result.reason = messages.no_convergence(
             settings.max_iterations, increment, settings.tolerance, self._balance_note(result),
-            "Newton steps") + messages.hardening_hint(problem.scene)
+            "Newton steps") + messages.hardening_hint(problem.scene) \
+            + messages.strength_friction_hint(self._factor_at_strength())
         result.cause = "max_iterations"
         return result
 
@@ -501,5 +521,6 @@ class NewtonSolver(SecantSolver):
         direct.linear_solves += result.linear_solves
         direct.force_balance_checks = result.force_balance_checks + direct.force_balance_checks
         direct.fallback = failed
-        direct.reason = messages.after_fallback(direct.reason, failed)
+        direct.reason = messages.after_fallback(direct.reason, failed) \
+            + messages.strength_friction_hint(self._factor_at_strength())
         return direct
