@@ -221,6 +221,16 @@ def test_annealed_strip_answer_does_not_hang_on_the_strain_floor():
         assert summary["converged"], summary["reason"]
         assert summary["redundant_work_factor"] > 1.0
         answers.append(summary)
+    # the back tension, 20 MPa, over the stock's 2k at the strain floor (Hollomon 315 eps^0.54):
+    # the stock yields before the rolls, and the warning says what that does to entry_speed
+    ratio = 20.0 / (2.0 / math.sqrt(3.0) * 315.0 * 0.002**0.54)
+    assert answers[0]["stock_yield_ratio"] == pytest.approx(ratio, rel=1e-2)
+    warning = next(w for w in answers[0]["warnings"] if "process.back_tension = 20 is" in w)
+    assert "stretches before the rolls until it hardens" in warning
+    crossing = answers[0]["free_surface_crossing_stock"]
+    assert 0.01 < crossing < 0.05 and f"{100 * crossing:.3g} % of the throughput" in warning
+    continuity = 1.0 - answers[0]["entry_speed"] * 3.0 / (answers[0]["exit_speed"] * 2.4)
+    assert continuity == pytest.approx(crossing, rel=0.1)
     for key in ("roll_force", "roll_torque"):
         assert answers[1][key] == pytest.approx(answers[0][key], rel=5e-3), key
 

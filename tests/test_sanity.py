@@ -267,6 +267,33 @@ def test_a_back_tension_near_the_stocks_yield_stress_is_named():
     assert "free_surface.update" not in stopped["stock_yield"].message
 
 
+def test_a_rolling_back_tension_above_the_stocks_yield_stress_is_named():
+    """Rolling's process.back_tension over the stock's 2k: the annealed copper strip demo's 20 MPa
+    is 1.57 times it at the strain floor, and its stock crosses its surface before the bite (2.55 %
+    of the throughput, entry_speed 2.4 % below exit_speed h1/h0: stop 71). A stock that does not
+    harden fails above 1 (it stretches without end)."""
+    scene = scene_from_dict({"process": {"kind": "rolling", "back_tension": 20.0},
+                             "geometry": {"entry_thickness": 3.0, "exit_thickness": 2.4,
+                                          "roll_radius": 75.0}, "friction": {"mu": 0.12}})
+    rolled = {**NORMAL, "entry_speed": 0.8, "exit_speed": 1.03, "neutral_x": 1.0,
+              "roll_torque": 1.0e4, "free_surface_crossing_stock": 0.0255}
+    found = {f.check: f for f in check_run(
+        {**rolled, "stock_yield_ratio": 1.57, "mean_entry_strain": 0.0}, scene)}
+    warned = found["stock_yield"]
+    assert not warned.failure and warned.cause
+    assert "process.back_tension = 20 is 1.57 times" in warned.message
+    assert "stretches before the rolls" in warned.message and "roll a stronger" in warned.message
+    assert "2.55 % of the throughput enters" in warned.message and "entry_speed" in warned.message
+    found = {f.check: f for f in check_run({**rolled, "stock_yield_ratio": 1.05}, scene)}
+    assert found["stock_yield"].failure and "no steady rolling" in found["stock_yield"].message
+    assert "stock_yield" not in {f.check for f in check_run(
+        {**rolled, "stock_yield_ratio": 0.43}, scene)}
+    # the crossing's causes in rolling: the stock before the bite, not a die's gap
+    crossed = {f.check: f for f in check_run({**rolled, "free_surface_crossing": 0.06}, scene)}
+    message = crossed["free_surface_crossing"].message
+    assert "the stock yields before the bite" in message and "die leaves a gap" not in message
+
+
 def test_a_hardening_strain_that_runs_away_is_named():
     """A hardening law's largest strain gained against the ideal strain ln(A0/A1): at most 4.4
     times it on the demos and their variants (a cold rod at m = 0.8), silent there; a warning above

@@ -169,17 +169,26 @@ def stock_yield(summary: dict[str, Any], scene: Scene, converged: bool = True
     plane = scene.geometry.symmetry == "plane_strain"
     hardening = summary.get("mean_entry_strain") is not None
     limit = ("2k" if plane else "sigma0") + (" at its entry strain" if hardening else "")
+    rolling = scene.process.kind == "rolling"
+    tool, verb = ("the rolls", "roll") if rolling else ("the die", "draw")
+    key, back = (("process.back_tension", scene.process.back_tension) if rolling else
+                 ("process.applied_force", scene.process.applied_force))
     failed = ratio > STOCK_YIELD[1] and not hardening
-    tail = ("it yields under it and, not hardening, stretches without end: no steady drawing "
-            "exists" if failed else
-            "it yields under it and stretches before the die until it hardens to carry it"
-            if ratio > STOCK_YIELD[1] else "it narrows before the die, close to yielding")
+    tail = (f"it yields under it and, not hardening, stretches without end: no steady "
+            f"{'rolling' if rolling else 'drawing'} exists" if failed else
+            f"it yields under it and stretches before {tool} until it hardens to carry it"
+            if ratio > STOCK_YIELD[1] else f"it narrows before {tool}, close to yielding")
+    # rolling: the stock's crossing is what the strip's entry speed misses of continuity
+    crossing = summary.get("free_surface_crossing_stock", math.nan)
+    entry = (f" The strip thins before the bite, and {100 * crossing:.3g} % of the throughput "
+             "enters through its surface, which the model holds at the entry thickness: "
+             "entry_speed lies that much below exit_speed h1/h0." if rolling else "")
     return Finding("stock_yield",
-                   f"the back tension process.applied_force = {scene.process.applied_force:.4g} is "
-                   f"{ratio:.3g} times the yield stress in tension of the stock ({limit}): {tail}. "
-                   "The fixed domain keeps the stock's size, and near this limit the iteration may "
-                   f"not converge: lower the back tension (below {STOCK_YIELD[0]:g} of that "
-                   "stress) or draw a stronger stock (material.initial_strain)"
+                   f"the back tension {key} = {back:.4g} is "
+                   f"{ratio:.3g} times the yield stress in tension of the stock ({limit}): {tail}."
+                   f"{entry} The fixed domain keeps the stock's size, and near this limit the "
+                   f"iteration may not converge: lower the back tension (below {STOCK_YIELD[0]:g} "
+                   f"of that stress) or {verb} a stronger stock (material.initial_strain)"
                    + ("" if failed or not converged else _update_hint(scene)),
                    failure=failed, cause=True)
 
@@ -286,12 +295,17 @@ def drawability(summary: dict[str, Any], scene: Scene, found: list[Finding]) -> 
 def free_surfaces(summary: dict[str, Any], scene: Scene) -> Finding | None:
     """Flow across the free surfaces of the fixed domain (2.6)."""
     value = summary["free_surface_crossing"]
+    causes = ("the stock yields before the bite (a soft stock, a back tension: entry_speed then "
+              "misses continuity with exit_speed h1/h0 by the stock's share), the strip yields "
+              "after the roll gap (a front tension), or a coarse mesh (refine "
+              "discretisation.mesh_size)" if scene.process.kind == "rolling" else
+              "the product yields after the die, the die leaves a gap the fixed domain ignores, "
+              "or a coarse mesh (the crossing falls like the mesh size: refine "
+              "discretisation.mesh_size)")
     return _graded("free_surface_crossing", value, FREE_SURFACE,
                    f"{100 * value:.3g} % of the throughput crosses the free surfaces of the fixed "
                    "domain (2.6): the real free surface lies elsewhere and the forces are those "
-                   "of another shape. Usual causes: the product yields after the die, the die "
-                   "leaves a gap the fixed domain ignores, or a coarse mesh (the crossing falls "
-                   "like the mesh size: refine discretisation.mesh_size)" + _update_hint(scene))
+                   f"of another shape. Usual causes: {causes}" + _update_hint(scene))
 
 
 def unpressed_friction(summary: dict[str, Any], scene: Scene) -> Finding | None:

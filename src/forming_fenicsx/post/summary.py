@@ -39,6 +39,16 @@ def crossing_keys(crossed: dict[str, float]) -> dict[str, float]:
             **{f"free_surface_crossing_{name}": value for name, value in crossed.items()}}
 
 
+def stock_yield_ratio(problem: FlowProblem, back: float | None) -> dict[str, float]:
+    """A back tension (drawing's process.applied_force, rolling's process.back_tension) over the
+    stock's yield stress in tension at the strain it flows in with (2k in plane strain): empty
+    without one."""
+    if not back or back <= 0:
+        return {}
+    tensile = problem.coordinates.tensile_yield_factor
+    return {"stock_yield_ratio": back / (tensile * product_flow_stress(problem, False))}
+
+
 def scalars(problem: FlowProblem) -> dict[str, float]:
     """The summary numbers of a run: process force and pressure, die forces and the x force
     balance, forces on the whole product (whole_product).
@@ -62,16 +72,14 @@ def scalars(problem: FlowProblem) -> dict[str, float]:
         profile = die_profile(problem)
         process = {"roll_force": die_separation_force(problem),
                    **roll_scalars(problem, profile), **die_scalars_of(problem, profile),
+                   **stock_yield_ratio(problem, problem.scene.process.back_tension),
                    **pass_shape(problem)}
     else:
         stress = force / exit_section(problem)
-        tensile = problem.coordinates.tensile_yield_factor
-        strength = tensile * product_flow_stress(problem)
-        back = problem.scene.process.applied_force or 0.0  # a back tension pulls the stock
+        strength = problem.coordinates.tensile_yield_factor * product_flow_stress(problem)
         process = {"drawing_force": force, "drawing_stress": stress,
                    "product_yield_ratio": stress / strength,
-                   **({"stock_yield_ratio": back / (tensile * product_flow_stress(problem, False))}
-                      if back > 0 else {}),
+                   **stock_yield_ratio(problem, problem.scene.process.applied_force),
                    **die_numbers(problem), **pass_shape(problem)}
     if three_d:
         process.update(section_areas(problem))
