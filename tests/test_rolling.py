@@ -379,7 +379,9 @@ def test_coulombs_bound_on_a_rate_sensitive_steel_is_not_capped_at_k():
     assert capped["roll_force"] == pytest.approx(15071.1, rel=3e-4)
     assert abs(found[None, 2e-3]["roll_force"] / free["roll_force"] - 1) < 2e-3
     assert found[True, 2e-3]["roll_force"] / capped["roll_force"] - 1 < -5e-3
-    assert "friction_at_strength_share" not in free and not free["warnings"]
+    assert "friction_at_strength_share" not in free
+    # its only warning: 0.49 % of the throughput into the rolls (the pure penalty, stop 71)
+    assert len(free["warnings"]) == 1 and "flows into the rolls" in free["warnings"][0]
     assert capped["friction_at_strength_share"] == pytest.approx(0.52, abs=0.03)
     assert any("friction.shear_limit = false" in w for w in capped["warnings"])
 

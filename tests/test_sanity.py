@@ -294,6 +294,27 @@ def test_a_rolling_back_tension_above_the_stocks_yield_stress_is_named():
     assert "the stock yields before the bite" in message and "die leaves a gap" not in message
 
 
+def test_rolling_warns_of_flow_into_the_rolls_from_a_fifth_of_a_percent():
+    """The pure penalty lets 0.55 % of a copper slab's throughput (8 -> 5 mm, R = 300 mm) into the
+    rolls: its forward slip 9.41 % against the augmented contact's 9.68 %, the roll force 0.7 % low
+    (stop 71). Rolling warns above 0.2 %; drawing and extrusion above 1 %."""
+    scene = scene_from_dict({"process": {"kind": "rolling"},
+                             "geometry": {"entry_thickness": 8.0, "exit_thickness": 5.0,
+                                          "roll_radius": 300.0}, "friction": {"mu": 0.3}})
+    rolled = {**NORMAL, "entry_speed": 0.8, "exit_speed": 1.09, "neutral_x": 1.0,
+              "roll_torque": 1.0e4}
+
+    def checked(penetration: float, on: object = scene) -> dict:
+        return {f.check: f for f in check_run({**rolled, "die_penetration": penetration}, on)}
+
+    assert "die_penetration" not in checked(0.0015)
+    warned = checked(0.0055)["die_penetration"]
+    assert not warned.failure and "0.55 % of the throughput flows into the rolls" in warned.message
+    assert "forward slip" in warned.message and "penalty.augmented = true" in warned.message
+    drawing = scene_from_dict({"process": {"kind": "drawing"}})
+    assert "die_penetration" not in checked(0.0055, drawing)
+
+
 def test_a_hardening_strain_that_runs_away_is_named():
     """A hardening law's largest strain gained against the ideal strain ln(A0/A1): at most 4.4
     times it on the demos and their variants (a cold rod at m = 0.8), silent there; a warning above
