@@ -166,8 +166,10 @@ def compressibility(summary: dict[str, Any], scene: Scene, found: list[Finding]
 
 def stock_yield(summary: dict[str, Any], scene: Scene, converged: bool = True
                 ) -> Finding | None:
-    """A drawing's back tension (process.applied_force > 0 on the entry face) against the stock's
-    yield stress in tension at its entry strain (2k in plane strain, sigma0 for a round or 3D bar).
+    """A back tension (drawing's process.applied_force > 0 on the entry face, rolling's
+    process.back_tension) against the stock's yield stress in tension at its entry strain (2k in
+    plane strain, sigma0 for a round or 3D bar). In rolling the stock's crossing is what the
+    strip's entry speed misses of continuity (the annealed copper demo: 2.55 %, docs/rolling.md).
     Near it the stock narrows before the die, which the fixed domain does not follow (an annealed
     steel wire: the stock's crossing 1.3 % without tension, 3.8 % at 0.91; at 0.94 its Newton
     iteration stopped as ill-conditioned on one mesh, docs/sanity.md). Above it a hardening stock
@@ -189,7 +191,6 @@ def stock_yield(summary: dict[str, Any], scene: Scene, converged: bool = True
             f"{'rolling' if rolling else 'drawing'} exists" if failed else
             f"it yields under it and stretches before {tool} until it hardens to carry it"
             if ratio > STOCK_YIELD[1] else f"it narrows before {tool}, close to yielding")
-    # rolling: the stock's crossing is what the strip's entry speed misses of continuity
     crossing = summary.get("free_surface_crossing_stock", math.nan)
     entry = (f" The strip thins before the bite, and {100 * crossing:.3g} % of the throughput "
              "enters through its surface, which the model holds at the entry thickness: "
