@@ -61,7 +61,8 @@ def scene_temperature_field(problem, plastic_power: FieldExpression | None = Non
     def flow_power(v, T):
         return problem.flow_stress(v) * problem.equivalent_strain_rate(v)
 
-    def slip_power(v, T):  # tau_f |s|^2 / sqrt(|s|^2 + d_T^2): the regularised law's at v itself
+    def slip_power(v, T):  # c(v) |s|^2 at v itself: tau_f/sqrt(|s|^2 + d_T^2), or sticking's
+        # constant k0/d_T (FlowProblem.friction_coefficient)
         slip = problem.slip(v)
         tangent = tangential(slip, problem.n)
         return problem.friction_coefficient(v) * ufl.dot(tangent, tangent)
