@@ -212,7 +212,7 @@ def test_the_friction_factor_on_an_unpressed_roll_warns():
         f.check for f in check_run({**rolled, "unpressed_friction_torque": -5e5}, scene)}
     # sticking's penalised slip does not vanish with the pressure either (15 % on stop 70's steel
     # pass 8 -> 5 mm), and the message names it
-    scene.friction = dataclasses.replace(scene.friction, law="sticking", m=0.0)
+    scene.friction = dataclasses.replace(scene.friction, law="sticking", m=0.0, sticks=True)
     message = {f.check: f for f in check_run({**rolled, "unpressed_friction_torque": -6.49e6},
                                              scene)}["unpressed_friction"].message
     assert message.startswith("sticking friction acts") and "and sticking, unlike" in message
@@ -224,7 +224,8 @@ def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
     the fix of the friction law: d_T halved for the factor law, the cap off for Coulomb's."""
     rolled = {**NORMAL, "roll_torque": 1.7e5, "neutral_angle": 2.9, "bite_angle": 7.0,
               "forward_slip": 0.11}
-    for law, fix in (({"law": "factor", "m": 1.0}, "friction.d_T_relative = 0.0005"),
+    for law, fix in (({"law": "factor", "m": 1.0, "sticks": False},
+                      "friction.d_T_relative = 0.0005"),
                      ({"mu": 0.3, "shear_limit": True}, "friction.shear_limit = false")):
         scene = scene_from_dict({"process": {"kind": "rolling", "velocity": 1500.0},
                                  "geometry": {"entry_thickness": 8.0, "exit_thickness": 5.0,
@@ -235,8 +236,9 @@ def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
                                                scene)}
         message = found["friction_at_strength"].message
         assert "over 83 % of the friction's torque" in message and fix in message
-        # the factor law's limit d_T -> 0 at m = 1 is sticking's (docs/rolling.md)
-        assert ('friction.law = "sticking"' in message) is (law.get("law") == "factor")
+        # the factor law's limit d_T -> 0 at m = 1 is sticking's, m = 1's default on this metal
+        # (docs/rolling.md)
+        assert ("m = 1 is solved as it by default" in message) is (law.get("law") == "factor")
         assert "friction_at_strength" not in {f.check for f in check_run(
             {**rolled, "friction_at_strength_share": 0.09}, scene)}
 

@@ -94,6 +94,8 @@ class Scene:
         self.friction.resolve(scales, ROLLING_D_T_RELATIVE if rolling else D_T_RELATIVE)
         if self.friction.shear_limit is None:
             self.friction.shear_limit = rolling and not self.rate_sensitive
+        if self.friction.sticks is None:
+            self.friction.sticks = self.friction.law == "sticking" or self._factor_limit_sticks
         relative = (MESH_SIZE_RELATIVE_3D if self.geometry.three_dimensional
                     else MESH_SIZE_RELATIVE[self.process.kind])
         self.discretisation.resolve(self.geometry.thinnest, relative)
@@ -176,6 +178,7 @@ class Scene:
                              "times that slip, has no bound there (Example 1 with it: a ram "
                              'pressure of 6955 k). friction.law = "factor" with m = 1 bounds the '
                              "friction at the shear flow stress k")
+        self._check_sticks()
         if self.process.kind == "rolling" and self.friction.coefficient <= 0:
             key = "friction.m" if self.friction.law == "factor" else "friction.mu"
             raise SceneError(key, "must be > 0 for rolling: the rolls draw the strip in by "
@@ -194,6 +197,20 @@ class Scene:
                              "must be <= the thinnest half-thickness "
                              f"({self.geometry.thinnest}) so that at least one element spans it; "
                              f"got {self.discretisation.mesh_size}")
+
+    def _check_sticks(self) -> None:
+        """friction.sticks: always with law "sticking", and otherwise only at the factor law's
+        m = 1 in rolling, the law whose limit sticking is."""
+        law = self.friction
+        if law.law == "sticking" and law.sticks is False:
+            raise SceneError("friction.sticks", 'friction.law = "sticking" is sticking: leave '
+                             'friction.sticks out, or give friction.law = "factor" with m = 1')
+        if law.sticks and law.law != "sticking" and not (
+                law.law == "factor" and law.m == 1.0 and self.process.kind == "rolling"):
+            raise SceneError("friction.sticks", "solves rolling's factor law at m = 1 as "
+                             "sticking, its limit; it does not apply to friction.law = "
+                             f"{law.law!r} with m = {law.m:g} in {self.process.kind}: leave it "
+                             "out")
 
     def _check_free_surface(self) -> None:
         """The free-surface update re-meshes the built-in 2D workpiece of a profiled die."""
@@ -218,6 +235,17 @@ class Scene:
         """Whether the flow law reads a transported field at the integration points: the strain
         of a hardening law, or the [thermal] temperature of a law that heats."""
         return self.material.hardens or (self.material.heats and self.thermal is not None)
+
+    @property
+    def _factor_limit_sticks(self) -> bool:
+        """Whether rolling's factor law is at m = 1 on a rate-sensitive metal that does not
+        harden. There the interface is exactly as strong as the metal under it, the slip's split
+        between them is free but for d_T, and Newton creeps along it (76 to 279 linear solves);
+        the roll force lies 1.9 to 3.5 % below its d_T -> 0 limit, which sticking reaches within
+        0.1 to 0.5 % in about 10 solves (docs/rolling.md)."""
+        law = self.friction
+        return (self.process.kind == "rolling" and law.law == "factor" and law.m == 1.0
+                and self.rate_sensitive and not self.material.hardens)
 
     @property
     def rate_sensitive(self) -> bool:

@@ -108,6 +108,9 @@ class Friction:
     shear flow stress, tau_f = min(mu sigma_N-bar, k) (default: in rolling on a metal that is not
     rate-sensitive; off elsewhere, the paper's law, and on a rate-sensitive metal, whose surface
     layer bounds the friction at its own rate: docs/rolling.md); the factor law never exceeds k.
+    ``sticks``: whether the friction is solved as sticking: law "sticking", and by default in
+    rolling the factor law at m = 1 on a rate-sensitive metal that does not harden, whose d_T -> 0
+    limit sticking is (docs/rolling.md); false keeps the factor law there.
     """
 
     law: str = "coulomb"
@@ -118,6 +121,7 @@ class Friction:
     normal_stress: str = "averaged"
     mollification_length: float | None = None
     shear_limit: bool | None = None
+    sticks: bool | None = None
 
     @property
     def coefficient(self) -> float:

@@ -125,8 +125,9 @@ class FlowProblem:
         self.has_contact = "gamma3_contact" in self.roles
         law = scene.friction
         self.has_friction = self.has_contact and law.coefficient > 0
-        # sticking: the slip penalised at a fixed stiffness, no bound to freeze (friction.py)
-        self.sticking = self.has_friction and law.law == "sticking"
+        # sticking (or the factor law's m = 1 solved as its limit, Friction.sticks): the slip
+        # penalised at a fixed stiffness, no bound to freeze (friction.py)
+        self.sticking = self.has_friction and bool(law.sticks)
         self._sticking_stiffness = dolfinx.fem.Constant(mesh, PETSc.ScalarType(
             friction.sticking_coefficient(scene.scales.flow_stress, law.d_T))) \
             if self.sticking else None
@@ -154,15 +155,16 @@ class FlowProblem:
         # m k(rate) (newton.py), k read at the rate floor where the metal is rigid (yield_stress);
         # not in the mixed formulation, where a steel pass at m = 1 then diverged (docs/rolling.md)
         self.factor_bound_moves = (
-            self.rolling and self.has_friction and law.law == "factor" and not self.mixed
-            and scene.rate_sensitive)
+            self.rolling and self.has_friction and law.law == "factor" and not self.sticking
+            and not self.mixed and scene.rate_sensitive)
         # rolling's bound that can reach a rate-sensitive metal's shear strength k (the factor law
         # at m > 0.99, Coulomb's capped at k): there the slip regularisation d_T splits the slip
         # between the interface and the metal under it, nearly freely (docs/rolling.md)
         reaches = {"factor": law.m > 1.0 - friction.STRENGTH_MARGIN,
                    "coulomb": law.shear_limit, "sticking": False}[law.law]
         self.bound_reaches_strength = bool(
-            self.rolling and self.has_friction and reaches and scene.rate_sensitive)
+            self.rolling and self.has_friction and not self.sticking and reaches
+            and scene.rate_sensitive)
         self.friction_state: FrozenVelocity | None = None
         self.normal_stress_average: BoundaryFilter | None = None
         if self.has_friction and not self.sticking:

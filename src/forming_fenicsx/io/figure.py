@@ -62,7 +62,8 @@ def run_settings(scene: Scene) -> str:
         die = (f", die {g.semi_angle:.4g} deg{' (chord)' if chord else ''}"
                f"{f' (width {g.width_angle:.4g} deg)' if width else ''}")
     friction = {"factor": f"m = {f.m:.4g}", "coulomb": f"mu = {f.mu:.4g}",
-                "sticking": "sticking"}[f.law]
+                "sticking": "sticking"}[f.law] + (" (sticking)" if f.law == "factor" and f.sticks
+                                                  else "")
     mesh = f"mesh {Path(g.mesh_file).name}" if g.mesh_file else f"h = {d.mesh_size:.3g}{unit}"
     return (f"{scene.process.kind}, {shape} {sizes}{unit}{die}, {friction}, {d.element} "
             f"{mesh}")

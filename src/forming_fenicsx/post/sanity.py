@@ -358,7 +358,7 @@ def _unpressed_roll(summary: dict[str, Any], scene: Scene) -> Finding | None:
     share = abs(torque) / abs(total) if total else 0.0
     if not share > UNPRESSED_FRICTION:
         return None
-    acts, law = (("sticking friction", "sticking") if scene.friction.law == "sticking" else
+    acts, law = (("sticking friction", "sticking") if scene.friction.sticks else
                  ("the friction factor's m k", "the factor law"))
     return Finding("unpressed_friction",
                    f"{acts} acts where the rolled strip does not press on the rolls (its contact "
@@ -379,9 +379,10 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
     law = scene.friction
     half = f"friction.d_T_relative = {law.d_T_relative / 2:.3g} (half of this run's)"
     fix = (f"Rerun with {half} to see how far: the answer moves toward its d_T -> 0 limit, "
-           "which lay about 1.9 % above a steel pass's default at m = 1. friction.law = "
-           '"sticking" holds the strip to the rolls: that limit on a metal that does not '
-           "harden, in about 10 linear solves (docs/rolling.md)" if law.law == "factor" else
+           "which lay 1.9 to 3.5 % above steel passes' defaults at m = 1. Sticking holds the "
+           "strip to the rolls: that limit on a metal that does not harden, in about 10 linear "
+           'solves, and m = 1 is solved as it by default there (friction.sticks; '
+           "docs/rolling.md)" if law.law == "factor" else
            "With friction.shear_limit = false (the default on a rate-sensitive metal) the metal "
            "under the surface bounds the friction at its own rate, and d_T moves the roll force "
            f"by 0.1 % or less; or rerun with {half} to see how far")

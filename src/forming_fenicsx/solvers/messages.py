@@ -168,11 +168,12 @@ def strength_friction_hint(factor_at_strength: bool) -> str:
     of a rate-sensitive metal (FlowProblem.bound_reaches_strength)."""
     if not factor_at_strength:
         return ""
-    return ("; the friction factor m = 1 puts the interface at the rate-sensitive metal's own "
-            "shear strength: the slip splits between the two nearly freely, Newton's step along "
-            "that split is nearly singular, and the roll force rises steeply as m nears 1 "
-            "(docs/rolling.md#sticking). friction.law = \"sticking\", the law's d_T -> 0 limit, "
-            "or m = 0.95 converge in about 10 to 20 solves")
+    return ("; a friction factor within 1 % of 1 puts the interface at the rate-sensitive "
+            "metal's own shear strength: the slip splits between the two nearly freely, Newton's "
+            "step along that split is nearly singular, and the roll force rises steeply as m "
+            "nears 1 (docs/rolling.md#sticking). Sticking, the law's d_T -> 0 limit at m = 1 "
+            "(friction.law = \"sticking\", or m = 1 without friction.sticks = false), or "
+            "m = 0.95 converge in about 10 to 20 solves")
 
 
 def newton_trigger(records: list[IterationRecord]) -> str:
