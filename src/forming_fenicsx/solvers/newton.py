@@ -220,10 +220,11 @@ class NewtonSolver(SecantSolver):
             error = self._estimate()  # of A's solve, before du moves
             self._estimate = lambda: error
             # GMRES stopped short: the strain's step keeps its last iterate (a cold copper pass
-            # at m = 1 failed with the frozen step); the friction bound's, near sticking where J
-            # is near singular, the frozen step (two steel passes then stopped unconverged;
-            # docs/hardening.md)
-            keep = not self._friction_in_tangent
+            # at m = 1 failed with the frozen step, and the copper demo on a fine mesh took 25
+            # solves with both derivatives, 19 with it); the friction bound's alone, near
+            # sticking where J is near singular, the frozen step (two steel passes then stopped
+            # unconverged; docs/hardening.md)
+            keep = not self._friction_in_tangent or self._coupled_in_tangent()
             converged = self.tangent.solve(self.newton.b, du, corrections, keep)
             fallback = "its last iterate" if keep else "the frozen step"
             frozen = not converged and not keep
