@@ -207,10 +207,10 @@ class Scene:
                              'friction.sticks out, or give friction.law = "factor" with m = 1')
         if law.sticks and law.law != "sticking" and not (
                 law.law == "factor" and law.m == 1.0 and self.process.kind == "rolling"):
+            given = f"{law.law!r}" + (f" with m = {law.m:g}" if law.law == "factor" else "")
             raise SceneError("friction.sticks", "solves rolling's factor law at m = 1 as "
-                             "sticking, its limit; it does not apply to friction.law = "
-                             f"{law.law!r} with m = {law.m:g} in {self.process.kind}: leave it "
-                             "out")
+                             f"sticking, its limit; it does not apply to friction.law = {given} "
+                             f"in {self.process.kind}: leave it out")
 
     def _check_free_surface(self) -> None:
         """The free-surface update re-meshes the built-in 2D workpiece of a profiled die."""
