@@ -236,6 +236,7 @@ def test_friction_at_a_rate_sensitive_metals_shear_strength_warns():
                                                scene)}
         message = found["friction_at_strength"].message
         assert "over 83 % of the friction's torque" in message and fix in message
+        assert "d ln sigma_p / d ln rate = 0.15 at the process strain rate" in message
         # the factor law's limit d_T -> 0 at m = 1 is sticking's, m = 1's default on this metal
         # (docs/rolling.md)
         assert ("m = 1 is solved as it by default" in message) is (law.get("law") == "factor")

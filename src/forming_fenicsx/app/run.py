@@ -327,7 +327,7 @@ def _solve_and_write(scene: Scene, out: Path, petsc_options: dict[str, Any] | No
                      labelled("entry_speed"))
             if scene.friction.law == "factor" and scene.friction.sticks:
                 log.info("friction: m = 1 solved as sticking, the factor law's d_T -> 0 limit "
-                         "on a rate-sensitive metal (friction.sticks; docs/rolling.md)")
+                         "on a strongly rate-sensitive metal (friction.sticks; docs/rolling.md)")
         if "free_surface" in summary:
             surface = summary["free_surface"]
             size = f"exit_{scene.geometry.thickness_name}"  # free_surface.shape_scalars' key

@@ -33,7 +33,7 @@ from forming_fenicsx.config.strain_profile import (check_section, read_strain_pr
 from forming_fenicsx.core.errors import SceneError
 from forming_fenicsx.core.units import TIMES, Units
 from forming_fenicsx.physics.flow_laws import FlowLaw, rate_sensitivity
-from forming_fenicsx.physics.friction import RATE_SENSITIVE
+from forming_fenicsx.physics.friction import RATE_SENSITIVE, STICKING_RATE_SENSITIVITY
 
 
 # The default mesh size over the exit half-thickness: about 5 elements across it (Example 1's 0.5),
@@ -238,14 +238,16 @@ class Scene:
 
     @property
     def _factor_limit_sticks(self) -> bool:
-        """Whether rolling's factor law is at m = 1 on a rate-sensitive metal that does not
-        harden. There the interface is exactly as strong as the metal under it, the slip's split
-        between them is free but for d_T, and Newton creeps along it (76 to 279 linear solves);
-        the roll force lies 1.9 to 3.5 % below its d_T -> 0 limit, which sticking reaches within
-        0.1 to 0.5 % in about 10 solves (docs/rolling.md)."""
+        """Whether rolling's factor law is at m = 1 on a metal that does not harden, of rate
+        sensitivity at least friction.STICKING_RATE_SENSITIVITY. There the interface is exactly
+        as strong as the metal under it, the slip's split between them is free but for d_T, and
+        Newton creeps along it (up to 279 linear solves); the roll force lies 1.8 to 3.5 % below
+        its d_T -> 0 limit, which sticking meets within 0.1 to 0.6 % in about 10 solves
+        (docs/rolling.md)."""
         law = self.friction
         return (self.process.kind == "rolling" and law.law == "factor" and law.m == 1.0
-                and self.rate_sensitive and not self.material.hardens)
+                and not self.material.hardens and rate_sensitivity(
+                    self.material, self.reference_strain_rate) >= STICKING_RATE_SENSITIVITY)
 
     @property
     def rate_sensitive(self) -> bool:

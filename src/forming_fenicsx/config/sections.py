@@ -109,8 +109,9 @@ class Friction:
     rate-sensitive; off elsewhere, the paper's law, and on a rate-sensitive metal, whose surface
     layer bounds the friction at its own rate: docs/rolling.md); the factor law never exceeds k.
     ``sticks``: whether the friction is solved as sticking: law "sticking", and by default in
-    rolling the factor law at m = 1 on a rate-sensitive metal that does not harden, whose d_T -> 0
-    limit sticking is (docs/rolling.md); false keeps the factor law there.
+    rolling the factor law at m = 1 on a metal that does not harden, of rate sensitivity at least
+    friction.STICKING_RATE_SENSITIVITY, whose d_T -> 0 limit sticking is (docs/rolling.md); false
+    keeps the factor law there.
     """
 
     law: str = "coulomb"

@@ -37,6 +37,8 @@ from typing import Any
 
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.config.sections import D_RELATIVE
+from forming_fenicsx.physics.flow_laws import rate_sensitivity
+from forming_fenicsx.physics.friction import STICKING_RATE_SENSITIVITY
 from forming_fenicsx.physics.rolling_slab import bite_limit
 from forming_fenicsx.solvers.secant import ILL_CONDITIONED
 
@@ -371,27 +373,32 @@ def _unpressed_roll(summary: dict[str, Any], scene: Scene) -> Finding | None:
 def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | None:
     """Rolling: the share of the friction's torque given at a rate-sensitive metal's shear
     strength k (the factor law at m = 1, or Coulomb's cap at k), where the slip regularisation
-    d_T splits the slip between the interface and the metal under it: the roll force then moves
-    by 0.3 to 1 % when d_T doubles (docs/sanity.md)."""
+    d_T splits the slip between the interface and the metal under it: the roll force then moved
+    by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to 0.25, 0.05 % at 0.011
+    (docs/sanity.md)."""
     share = summary.get("friction_at_strength_share", 0.0)
     if not share > STRENGTH_FRICTION:
         return None
     law = scene.friction
     half = f"friction.d_T_relative = {law.d_T_relative / 2:.3g} (half of this run's)"
     fix = (f"Rerun with {half} to see how far: the answer moves toward its d_T -> 0 limit, "
-           "which lay 1.9 to 3.5 % above steel passes' defaults at m = 1. Sticking holds the "
+           "which lay 0.7 to 3.5 % above steel passes' defaults at m = 1. Sticking holds the "
            "strip to the rolls: that limit on a metal that does not harden, in about 10 linear "
-           'solves, and m = 1 is solved as it by default there (friction.sticks; '
-           "docs/rolling.md)" if law.law == "factor" else
+           "solves, and m = 1 is solved as it by default there from a rate sensitivity of "
+           f"{STICKING_RATE_SENSITIVITY:g} (friction.sticks; docs/rolling.md)"
+           if law.law == "factor" else
            "With friction.shear_limit = false (the default on a rate-sensitive metal) the metal "
            "under the surface bounds the friction at its own rate, and d_T moves the roll force "
            f"by 0.1 % or less; or rerun with {half} to see how far")
     return Finding("friction_at_strength",
                    "the friction stress reaches the metal's shear strength k over "
                    f"{100 * share:.2g} % of the friction's torque on the rolls, and the metal is "
-                   "rate-sensitive: there the slip regularisation friction.d_T decides how the "
-                   "slip splits between the interface and the metal under it, and the roll force "
-                   f"moves by 0.3 to 1 % when d_T doubles. {fix}")
+                   "rate-sensitive (d ln sigma_p / d ln rate = "
+                   f"{rate_sensitivity(scene.material, scene.reference_strain_rate):.2g} at the "
+                   "process strain rate): there the slip regularisation friction.d_T decides how "
+                   "the slip splits between the interface and the metal under it, and the roll "
+                   "force moved by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to "
+                   f"0.25 (0.05 % at 0.011). {fix}")
 
 
 def _update_applies(scene: Scene) -> bool:
