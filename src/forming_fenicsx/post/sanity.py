@@ -374,7 +374,7 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
     """Rolling: the share of the friction's torque given at a rate-sensitive metal's shear
     strength k (the factor law at m = 1, or Coulomb's cap at k), where the slip regularisation
     d_T splits the slip between the interface and the metal under it: the roll force then moved
-    by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to 0.25, 0.05 % at 0.011
+    by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to 0.25, 0.02 % at 0.011
     (docs/sanity.md)."""
     share = summary.get("friction_at_strength_share", 0.0)
     if not share > STRENGTH_FRICTION:
@@ -398,7 +398,7 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
                    "process strain rate): there the slip regularisation friction.d_T decides how "
                    "the slip splits between the interface and the metal under it, and the roll "
                    "force moved by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to "
-                   f"0.25 (0.05 % at 0.011). {fix}")
+                   f"0.25 (0.02 % at 0.011). {fix}")
 
 
 def _update_applies(scene: Scene) -> bool:
