@@ -172,8 +172,9 @@ def strength_friction_hint(factor_at_strength: bool) -> str:
             "metal's own shear strength: the slip splits between the two nearly freely, Newton's "
             "step along that split is nearly singular, and the roll force rises steeply as m "
             "nears 1 (docs/rolling.md#sticking). Sticking, the law's d_T -> 0 limit at m = 1 "
-            "(friction.law = \"sticking\", or m = 1 without friction.sticks = false), or "
-            "m = 0.95 converge in about 10 to 20 solves")
+            "(friction.law = \"sticking\"; m = 1 is solved as it by default on a strongly "
+            "rate-sensitive metal that does not harden), or m = 0.95 converge in about 10 to 20 "
+            "solves")
 
 
 def newton_trigger(records: list[IterationRecord]) -> str:
