@@ -242,7 +242,7 @@ class Scene:
         sensitivity at least friction.STICKING_RATE_SENSITIVITY. There the interface is exactly
         as strong as the metal under it, the slip's split between them is free but for d_T, and
         Newton creeps along it (up to 279 linear solves); the roll force lies 1.8 to 3.5 % below
-        its d_T -> 0 limit, which sticking meets within 0.1 to 0.6 % in about 10 solves
+        its d_T -> 0 limit, which sticking meets within 0.07 to 0.6 % in about 10 solves
         (docs/rolling.md)."""
         law = self.friction
         return (self.process.kind == "rolling" and law.law == "factor" and law.m == 1.0

@@ -38,7 +38,7 @@ def factor_bound(m: float, flow_stress):
 RATE_SENSITIVE = 0.01
 # rolling's factor law at m = 1 is solved as sticking from this rate sensitivity on, midway between
 # the measured: at n = 0.1 to 0.3 (rate^n) its roll force lay 1.8 to 3.5 % below its d_T -> 0
-# limit and took up to 279 solves, where sticking lies 0.1 to 0.6 % above it; at n = 0.05 and
+# limit and took up to 279 solves, where sticking lies 0.07 to 0.6 % above it; at n = 0.05 and
 # 0.011 the factor law lay 0.3 and 0.05 % below in 14 and 18 solves, and sticking's mesh error
 # (0.2 to 0.4 % a halving) is the larger (docs/rolling.md)
 STICKING_RATE_SENSITIVITY = 0.075
