@@ -246,8 +246,14 @@ class Scene:
         (docs/rolling.md)."""
         law = self.friction
         return (self.process.kind == "rolling" and law.law == "factor" and law.m == 1.0
-                and not self.material.hardens and rate_sensitivity(
-                    self.material, self.reference_strain_rate) >= STICKING_RATE_SENSITIVITY)
+                and not self.material.hardens
+                and self.rate_sensitivity >= STICKING_RATE_SENSITIVITY)
+
+    @property
+    def rate_sensitivity(self) -> float:
+        """The flow law's d ln sigma_p / d ln rate at the reference strain rate
+        (flow_laws.rate_sensitivity)."""
+        return rate_sensitivity(self.material, self.reference_strain_rate)
 
     @property
     def rate_sensitive(self) -> bool:
@@ -258,7 +264,7 @@ class Scene:
         the friction at its own rate, and the cap at k of the element's rate left the roll force
         up to 1.9 % below its d_T -> 0 limit, moving by 0.3 to 0.9 % for d_T doubled
         (docs/rolling.md)."""
-        return rate_sensitivity(self.material, self.reference_strain_rate) >= RATE_SENSITIVE
+        return self.rate_sensitivity >= RATE_SENSITIVE
 
     @property
     def reference_strain_rate(self) -> float:

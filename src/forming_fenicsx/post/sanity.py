@@ -37,7 +37,6 @@ from typing import Any
 
 from forming_fenicsx.config.scene import Scene
 from forming_fenicsx.config.sections import D_RELATIVE
-from forming_fenicsx.physics.flow_laws import rate_sensitivity
 from forming_fenicsx.physics.friction import STICKING_RATE_SENSITIVITY
 from forming_fenicsx.physics.rolling_slab import bite_limit
 from forming_fenicsx.solvers.secant import ILL_CONDITIONED
@@ -394,7 +393,7 @@ def friction_at_strength(summary: dict[str, Any], scene: Scene) -> Finding | Non
                    "the friction stress reaches the metal's shear strength k over "
                    f"{100 * share:.2g} % of the friction's torque on the rolls, and the metal is "
                    "rate-sensitive (d ln sigma_p / d ln rate = "
-                   f"{rate_sensitivity(scene.material, scene.reference_strain_rate):.2g} at the "
+                   f"{scene.rate_sensitivity:.2g} at the "
                    "process strain rate): there the slip regularisation friction.d_T decides how "
                    "the slip splits between the interface and the metal under it, and the roll "
                    "force moved by 0.3 to 1 % when d_T doubled at rate sensitivities of 0.1 to "
