@@ -23,7 +23,8 @@ from forming_fenicsx.fem.forms import FlowProblem
 from forming_fenicsx.fem.tangent_gmres import TangentGMRES
 from forming_fenicsx.io.figure import run_settings
 from forming_fenicsx.mesh.geometry import build_mesh
-from forming_fenicsx.physics.rolling_slab import bite_limit, sims_sticking, slab_rolling
+from forming_fenicsx.physics.rolling_slab import (bite_limit, forward_slip_estimate,
+                                                  sims_sticking, slab_rolling)
 from forming_fenicsx.post.die import die_profile
 from forming_fenicsx.post.rolls import neutral_point
 
@@ -394,6 +395,25 @@ def test_coulombs_bound_on_a_rate_sensitive_steel_is_not_capped_at_k():
     assert any("friction.shear_limit = false" in w for w in capped["warnings"])
 
 
+def test_the_entry_speed_starts_at_the_slab_solutions():
+    """A thin strip (stop 66's steel 2 -> 1.4 mm at R = 400 mm and 1.5 m/s, mu = 0.3, R/h1 =
+    286): the entry speed is held for its first two solves at v_R (1 + S) h1/h0, S = 0.0816 the
+    slab solution's forward slip (capped at k, the pass's flow stress); the finite-element strip
+    slips forward by 9.14 %. Held at S = 0 until stop 72, Newton's first ten steps were cut to 0.1
+    to 0.4 while the strip gained that speed: 26 linear solves, now 17 to the same roll force."""
+    scene = _steel_scene(2.0, 1.4, 400.0, {"mu": 0.3})
+    problem, _, summary = solve_scene(scene, quiet=True)
+    slip = forward_slip_estimate(400.0, 2.0, 1.4, scene.reference_flow_stress / math.sqrt(3.0),
+                                 0.3, 0.0, 0.0)
+    assert slip == pytest.approx(0.0816, abs=5e-4)
+    assert float(problem.entry_speed.guess.value) == pytest.approx(1500.0 * (1 + slip) * 0.7,
+                                                                   rel=1e-12)
+    assert summary["converged"] and summary["linear_solves"] <= 20
+    assert summary["roll_force"] == pytest.approx(15336.0, rel=3e-4)
+    assert summary["forward_slip"] == pytest.approx(0.0914, abs=1e-3)
+    assert abs(summary["power_balance"]["residual"]) < 1e-3
+
+
 def test_a_sticking_pass_of_a_hardening_copper_keeps_the_strains_gmres_iterate():
     """A new user's cold pass (stop 67): annealed copper (Hollomon, K = 315 MPa, n = 0.54, its
     strain transported) 4 -> 3 mm between rolls of 100 mm radius at 500 mm/s, sticking (m = 1), mm
@@ -422,7 +442,9 @@ def test_gmres_short_of_both_derivatives_keeps_its_last_iterate(monkeypatch):
     15th step. With the frozen step then, as the bound's derivative alone takes it, the velocity
     moved by 0.7 and 13 % in two later steps (cut to 0.21 and 0.0044): 25 linear solves, 91026 N,
     2.3e-4 below the answer (91047 N at delta = 1e-6). GMRES's last iterate, as the strain's
-    derivative alone takes it: 19 solves, 91054 N (docs/hardening.md)."""
+    derivative alone takes it: 19 solves, 91054 N; 20 and 91048 N since stop 73 started the
+    entry speed at the slab's forward slip (docs/hardening.md). The bound 22 leaves the count's
+    path noise a margin and fails the frozen step's 25."""
     kept = []
     solve = TangentGMRES.solve
 
@@ -435,7 +457,7 @@ def test_gmres_short_of_both_derivatives_keeps_its_last_iterate(monkeypatch):
         "discretisation.mesh_size=0.0375", "output.fields=false", "output.figures=false"])
     summary = solve_scene(scene, quiet=True)[2]
     assert (2, False, True) in kept  # both derivatives, GMRES short, its last iterate kept
-    assert summary["converged"] and summary["linear_solves"] <= 20
+    assert summary["converged"] and summary["linear_solves"] <= 22
     assert summary["roll_force"] == pytest.approx(91047.0, rel=2e-4)
     assert abs(summary["power_balance"]["residual"]) < 1e-3
 

@@ -126,6 +126,19 @@ def slab_rolling(radius: float, entry_thickness: float, exit_thickness: float, k
                        friction=tau)
 
 
+def forward_slip_estimate(radius: float, entry_thickness: float, exit_thickness: float, k: float,
+                          mu: float, back_tension: float, front_tension: float) -> float:
+    """The Coulomb slab solution's forward slip S on 400 intervals (within 1e-5 of 4000's), or 0
+    where it has no neutral point: the finite-element model's first entry speed v_R (1 + S) h1/h0
+    (fem/forms.py)."""
+    try:
+        return slab_rolling(radius, entry_thickness, exit_thickness, k, mu,
+                            back_tension=back_tension, front_tension=front_tension,
+                            steps=400).forward_slip
+    except ValueError:
+        return 0.0
+
+
 def _trapezoid(values: np.ndarray, at: np.ndarray) -> float:
     return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(at)))
 
