@@ -96,9 +96,12 @@ def non_finite(outer: int, inner: int) -> str:
 
 
 def diverging(increments: list[float], outer: int, inner: int, note: str, method: str,
-              has_friction: bool) -> str:
+              less_friction: bool) -> str:
+    """``less_friction``: whether a smaller friction coefficient is advice to give: not in rolling,
+    whose rolls draw the strip by friction (a strip they could not draw in was told both to raise
+    the friction and to try less of it, until stop 73)."""
     others = " or ".join(m for m in ("direct", "modified") if m != method)
-    friction = ", a smaller friction coefficient" if has_friction else ""
+    friction = ", a smaller friction coefficient" if less_friction else ""
     return (f"diverging: the increment grew for 5 iterations to {increments[-1]:.3e} (outer "
             f"{outer}, inner {inner}; last increments {recent(increments)}){note}. "
             f"Try the {others} method{friction} or larger penalty parameters; see history.csv")

@@ -165,8 +165,9 @@ class SecantSolver:
             result.cause = "non_finite"
             return True
         if diverging(increments):
+            less_friction = self.problem.has_friction and not self.problem.rolling
             result.reason = messages.diverging(increments, outer, inner, friction_note,
-                                               settings.method, self.problem.has_friction)
+                                               settings.method, less_friction)
             result.cause = "diverging"
             return True
         if stalled(increments, self._stall_window()):
