@@ -402,7 +402,7 @@ def test_the_entry_speed_starts_at_the_slab_solutions():
     """A thin strip (stop 66's steel 2 -> 1.4 mm at R = 400 mm and 1.5 m/s, mu = 0.3, R/h1 =
     286): the entry speed is held for its first two solves at v_R (1 + S) h1/h0, S = 0.0816 the
     slab solution's forward slip (capped at k, the pass's flow stress); the finite-element strip
-    slips forward by 9.14 %. Held at S = 0 until stop 72, Newton's first ten steps were cut to 0.1
+    slips forward by 9.14 %. Held at S = 0 until stop 73, Newton's first ten steps were cut to 0.1
     to 0.4 while the strip gained that speed: 26 linear solves, now 17 to the same roll force."""
     scene = _steel_scene(2.0, 1.4, 400.0, {"mu": 0.3})
     problem, _, summary = solve_scene(scene, quiet=True)
